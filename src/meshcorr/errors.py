@@ -1,0 +1,24 @@
+"""Exceptions raised by meshcorr.
+
+Every problem with user input raises one of these with a message that names
+the problem and the fix; the CLI turns them into a one-line error and a
+non-zero exit code.
+"""
+
+from __future__ import annotations
+
+
+class MeshcorrError(Exception):
+    """Base class of every error meshcorr raises on purpose."""
+
+
+class MeshError(MeshcorrError, ValueError):
+    """A mesh cannot be used: unreadable, malformed, or unsuitable for the method."""
+
+
+class ParameterError(MeshcorrError, ValueError):
+    """An option has an invalid value."""
+
+
+class MeshWarning(UserWarning):
+    """A mesh was changed on input (e.g. polygons triangulated) or is suspicious."""

@@ -1,0 +1,338 @@
+"""Read and write meshes and vertex maps.
+
+Meshes are read with trimesh without processing, so vertex ``i`` of the file
+is vertex ``i`` of the arrays (correspondences are reported by vertex index).
+Every file is written atomically: to a temporary file in the same directory,
+then moved over the target with :func:`os.replace`.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import secrets
+import warnings
+from pathlib import Path
+from typing import BinaryIO, Callable
+
+import numpy as np
+import trimesh
+
+from meshcorr.errors import MeshError, MeshWarning, ParameterError
+
+__all__ = ["SUPPORTED_FORMATS", "atomic_write", "read_map", "read_mesh", "write_map", "write_mesh"]
+
+#: File extensions read_mesh and write_mesh understand, and their format names.
+SUPPORTED_FORMATS = {".off": "OFF", ".obj": "OBJ", ".ply": "PLY", ".stl": "STL"}
+_SUPPORTED_LIST = ", ".join(SUPPORTED_FORMATS)
+
+
+def _int_or_none(text) -> int | None:
+    try:
+        return int(text)
+    except (TypeError, ValueError):
+        return None
+
+
+def _off_header(data: bytes) -> tuple[int | None, int | None, int]:
+    """Declared (vertex count, face count) of an OFF file and the offset after the header."""
+    tokens: list[bytes] = []
+    offset = 0
+    for line in data[:65536].splitlines(keepends=True):
+        offset += len(line)
+        tokens.extend(line.split(b"#", 1)[0].split())
+        if tokens and tokens[0].endswith(b"OFF"):  # OFF, COFF, NOFF, "OFF 6 2 0", ...
+            if len(tokens) >= 4:
+                return _int_or_none(tokens[1]), _int_or_none(tokens[2]), offset
+        elif len(tokens) >= 3:  # header without the OFF keyword
+            return _int_or_none(tokens[0]), _int_or_none(tokens[1]), offset
+    return None, None, 0
+
+
+def _off_polygons(data: bytes, n_vertices: int, offset: int) -> int:
+    """Number of face records with more than 3 sides in an ASCII OFF body."""
+    lines = (l.split(b"#", 1)[0].split() for l in data[offset:].splitlines())
+    records = [l for l in lines if l][n_vertices:]
+    return sum(1 for rec in records if (_int_or_none(rec[0]) or 0) > 3)
+
+
+def _declared_counts(data: bytes, fmt: str) -> tuple[int | None, int | None]:
+    """(vertex records, face records) a file declares, read cheaply as text; None if unknown."""
+    if fmt == "OFF":
+        n_v, n_f, _ = _off_header(data)
+        return n_v, n_f
+    if fmt == "OBJ":
+        return (
+            len(re.findall(rb"^v[ \t]", data, flags=re.MULTILINE)),
+            len(re.findall(rb"^f[ \t]", data, flags=re.MULTILINE)),
+        )
+    if fmt == "PLY":
+        end = data.find(b"end_header")
+        if end < 0:
+            return None, None
+        header = data[:end].decode("ascii", errors="replace")
+        n_v = re.search(r"^element\s+vertex\s+(\d+)", header, flags=re.MULTILINE)
+        n_f = re.search(r"^element\s+face\s+(\d+)", header, flags=re.MULTILINE)
+        return (int(n_v.group(1)) if n_v else None), (int(n_f.group(1)) if n_f else None)
+    return None, None
+
+
+def _count_polygons(data: bytes, fmt: str, n_vertices: int | None) -> int | None:
+    """Exact number of faces with more than 3 sides, where cheap to find (OBJ, OFF)."""
+    if fmt == "OBJ":
+        return sum(
+            1 for rec in re.findall(rb"^f[ \t]+([^\n]*)", data, flags=re.MULTILINE)
+            if len(rec.split(b"#", 1)[0].split()) > 3
+        )
+    if fmt == "OFF" and n_vertices is not None:
+        return _off_polygons(data, n_vertices, _off_header(data)[2])
+    return None
+
+
+def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Read a triangle mesh from an OFF, OBJ, PLY or STL file, keeping vertex order.
+
+    Vertices are neither merged nor reordered (trimesh ``process=False``; for
+    OBJ also ``maintain_order=True`` so texture coordinates do not split
+    vertices), so vertex ``i`` of the file is row ``i`` of ``vertices``.
+    The exception is STL, which stores three unshared vertices per triangle:
+    there duplicate vertices are merged, as an STL file has no vertex order.
+    Polygons are triangulated by trimesh; a :class:`MeshWarning` says so.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The mesh file; its extension selects the format.
+    name : str, optional
+        How messages refer to the mesh; defaults to the path.
+
+    Returns
+    -------
+    vertices : (n, 3) float64
+        Vertex coordinates in file order.
+    faces : (m, 3) int64
+        Triangles as 0-based vertex indices (not validated; see
+        :func:`meshcorr.validate.validate_mesh`).
+
+    Raises
+    ------
+    MeshError
+        If the file is missing, empty, of an unsupported format, cannot be
+        parsed, holds several separate geometries or no faces.
+
+    Warns
+    -----
+    MeshWarning
+        If faces with more than 3 sides were triangulated, or if trailing
+        vertices used by no face were dropped from a textured OBJ.
+    """
+    path = Path(path)
+    label = name or str(path)
+    if not path.is_file():
+        raise MeshError(f"No such file: {path}" if not path.exists() else f"Not a file: {path}")
+    fmt = SUPPORTED_FORMATS.get(path.suffix.lower())
+    if fmt is None:
+        raise MeshError(
+            f"Unsupported mesh format '{path.suffix or '(no extension)'}' for {path}; "
+            f"supported: {_SUPPORTED_LIST}. Convert the file first (e.g. in MeshLab)."
+        )
+    data = path.read_bytes()
+    if not data or data.isspace():
+        raise MeshError(f"File is empty: {path}. Check that it was written completely.")
+    options = {"maintain_order": True, "skip_materials": True} if fmt == "OBJ" else {}
+    try:
+        scene = trimesh.load(path, file_type=fmt.lower(), process=False, force="scene", **options)
+    except Exception as exc:  # trimesh raises many types on corrupt input
+        raise MeshError(
+            f"{label}: the file could not be parsed as {fmt} ({type(exc).__name__}: {exc}). "
+            f"Check that it is a valid {fmt} file, e.g. by opening it in MeshLab."
+        ) from exc
+    geometries = list(scene.geometry.values())
+    if len(geometries) > 1:
+        raise MeshError(
+            f"{label} holds {len(geometries)} separate geometries (objects or materials); "
+            "meshcorr needs a single mesh. Merge them into one object first."
+        )
+    if not geometries or not isinstance(geometries[0], trimesh.Trimesh) or not len(geometries[0].faces):
+        raise MeshError(
+            f"{label}: the file contains no triangle faces (it is empty, a point cloud, "
+            f"or not a valid {fmt} file). meshcorr needs a triangle mesh."
+        )
+    mesh = geometries[0]
+    if fmt == "STL":
+        mesh.merge_vertices()
+    vertices = np.array(mesh.vertices, dtype=np.float64)
+    faces = np.array(mesh.faces, dtype=np.int64)
+    if fmt == "STL":
+        return vertices, faces
+
+    n_vertex_records, n_face_records = _declared_counts(data, fmt)
+    if n_face_records is not None and len(faces) > n_face_records:
+        n_polygons = _count_polygons(data, fmt, n_vertex_records)
+        what = f"{n_polygons} polygonal faces" if n_polygons else "polygonal faces"
+        warnings.warn(
+            MeshWarning(
+                f"{label}: {what} with more than 3 sides were triangulated "
+                f"({n_face_records} faces in the file became {len(faces)} triangles). "
+                "Triangulate the mesh yourself to control how."
+            ),
+            stacklevel=2,
+        )
+    if n_vertex_records is not None and len(vertices) != n_vertex_records:
+        if fmt == "OBJ" and len(vertices) < n_vertex_records:
+            warnings.warn(
+                MeshWarning(
+                    f"{label}: {n_vertex_records - len(vertices)} trailing vertices used by "
+                    "no face were dropped while reading; the other vertex indices are unchanged."
+                ),
+                stacklevel=2,
+            )
+        else:
+            raise MeshError(
+                f"{label}: the file declares {n_vertex_records} vertices but "
+                f"{len(vertices)} were read, so vertex order could not be preserved. "
+                "Re-save the file (e.g. in MeshLab) without texture seams or extra data."
+            )
+    return vertices, faces
+
+
+def atomic_write(path, writer: Callable[[BinaryIO], object]) -> None:
+    """Write a file atomically: all of it appears at ``path``, or nothing changes.
+
+    ``writer`` writes into a temporary file in the same directory, opened in
+    binary mode; the temporary file then replaces ``path`` with
+    :func:`os.replace`. If ``writer`` raises, the temporary file is removed
+    and ``path`` is left as it was.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to create or replace.
+    writer : callable
+        Called as ``writer(file)`` with a binary file object.
+
+    Raises
+    ------
+    ParameterError
+        If the directory of ``path`` does not exist.
+    """
+    path = Path(path)
+    directory = path.parent
+    if not directory.is_dir():
+        raise ParameterError(f"Cannot write {path}: directory {directory} does not exist.")
+    temp = directory / f".{path.name}.{secrets.token_hex(6)}.tmp"
+    # os.open applies the umask, so the final file gets ordinary permissions.
+    fd = os.open(temp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+    try:
+        with os.fdopen(fd, "wb") as file:
+            writer(file)
+            file.flush()
+            os.fsync(file.fileno())
+        os.replace(temp, path)
+    except BaseException:
+        temp.unlink(missing_ok=True)
+        raise
+
+
+def _check_map(mapping) -> np.ndarray:
+    mapping = np.asarray(mapping)
+    if mapping.ndim != 1 or not np.issubdtype(mapping.dtype, np.integer):
+        raise ParameterError(
+            "The 'mapping' parameter of write_map must be a 1-D integer array. "
+            f"Got shape {mapping.shape} and dtype {mapping.dtype} instead."
+        )
+    return mapping.astype(np.int64, copy=False)
+
+
+def write_map(path, mapping) -> None:
+    """Write a vertex map atomically: ``.npy`` with :func:`numpy.save`, else one integer per line.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Target file. ``.npy`` gives a NumPy file; any other extension
+        (``.txt``, ``.map``, none) gives text with one integer per line.
+    mapping : (n,) int
+        The map, e.g. ``p2p_21[i]`` = vertex of mesh 1 matched to vertex ``i`` of mesh 2.
+    """
+    mapping = _check_map(mapping)
+    if Path(path).suffix.lower() == ".npy":
+        atomic_write(path, lambda file: np.save(file, mapping, allow_pickle=False))
+    else:
+        text = "".join(f"{value}\n" for value in mapping.tolist())
+        atomic_write(path, lambda file: file.write(text.encode("ascii")))
+
+
+def read_map(path) -> np.ndarray:
+    """Read a vertex map written by :func:`write_map` (``.npy`` or one integer per line).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The map file. Blank lines in text files are ignored.
+
+    Returns
+    -------
+    mapping : (n,) int64
+
+    Raises
+    ------
+    ParameterError
+        If the file is missing or does not hold a 1-D array of integers.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ParameterError(f"No such file: {path}")
+    if path.suffix.lower() == ".npy":
+        try:
+            mapping = np.load(path, allow_pickle=False)
+        except Exception as exc:
+            raise ParameterError(f"{path}: could not be read as a .npy array ({exc}).") from exc
+        if mapping.ndim != 1 or not np.issubdtype(mapping.dtype, np.integer):
+            raise ParameterError(
+                f"{path}: a map must be a 1-D integer array; got shape {mapping.shape} "
+                f"and dtype {mapping.dtype}."
+            )
+        return mapping.astype(np.int64)
+    try:
+        lines = path.read_text(encoding="ascii").splitlines()
+    except UnicodeDecodeError as exc:
+        raise ParameterError(f"{path}: a map file must be text with one integer per line.") from exc
+    numbered = [(i + 1, line.strip()) for i, line in enumerate(lines) if line.strip()]
+    for number, line in numbered:
+        if not re.fullmatch(r"[+-]?\d+", line):
+            raise ParameterError(
+                f"{path}, line {number}: expected one integer per line, got {line[:40]!r}."
+            )
+    return np.array([int(line) for _, line in numbered], dtype=np.int64)
+
+
+def write_mesh(path, vertices, faces, vertex_colors=None) -> None:
+    """Write a triangle mesh atomically in the format given by the extension.
+
+    Vertex order is kept. PLY (and OBJ) keep ``vertex_colors``; OFF and STL drop them.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Target file ending in .off, .obj, .ply or .stl.
+    vertices : (n, 3) float
+    faces : (m, 3) int
+    vertex_colors : (n, 3) or (n, 4) uint8, optional
+        RGB(A) color per vertex.
+    """
+    fmt = SUPPORTED_FORMATS.get(Path(path).suffix.lower())
+    if fmt is None:
+        raise ParameterError(
+            f"Cannot write {path}: unsupported extension '{Path(path).suffix}'; "
+            f"use one of {_SUPPORTED_LIST}."
+        )
+    mesh = trimesh.Trimesh(
+        vertices=np.asarray(vertices, dtype=np.float64),
+        faces=np.asarray(faces, dtype=np.int64),
+        vertex_colors=vertex_colors,
+        process=False,
+    )
+    data = mesh.export(file_type=fmt.lower())
+    payload = data if isinstance(data, bytes) else data.encode("utf-8")
+    atomic_write(path, lambda file: file.write(payload))

@@ -1,0 +1,234 @@
+"""Eigenvector reordering and sign correction (ALGORITHM.md step 4).
+
+Eigenvectors of two shapes agree only up to sign, and close eigenvalues can
+swap order. The source embedding ``X`` stays fixed; a *configuration*
+``(perm, signs)`` rearranges the target embedding as
+``Y' = Y[:, perm] * signs``. Its cost is the mean nearest-neighbour distance
+
+.. math::
+
+    \\mathrm{cost}(\\pi, s) = \\frac{1}{n_1} \\sum_i \\min_j \\lVert X_i - Y'_j \\rVert
+
+(the paper's sum divided by ``n_1``: same ranking, comparable across sizes).
+
+Modes
+-----
+``"exhaustive"``: all ``d! 2^d`` configurations (3840 for k = 6). Scored on a
+seeded sample of source points with one KD-tree on the target: permuting and
+flipping the target's columns is an isometry, so it equals applying the
+inverse to the source points. The best ``n_rescore`` are re-scored on every
+point.
+``"greedy"``: the paper's heuristic: exhaustive over the first two source
+dimensions, then each further dimension takes the best remaining target
+eigenvector and sign (``O(d^2)`` configurations); the chosen order's
+``2^d`` sign variants are scored as well so the ranked list holds the
+near-tied alternatives (the mirror map is usually a sign flip).
+``"signs"``: eigenvalue order kept, all ``2^d`` sign sets.
+``"signs-greedy"``: eigenvalue order kept, signs fixed one eigenvector at a
+time (Shapiro & Brady).
+``"none"``: eigenvalue order and signs as computed.
+
+The heuristic modes also score the sign variants of their pick, so that the
+ranked list always holds the near-tied alternatives.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ._params import check_choice, check_int
+
+REORDER_MODES = ("exhaustive", "greedy", "signs", "signs-greedy", "none")
+
+
+@dataclass(frozen=True)
+class Configuration:
+    """One eigenvector permutation and sign set for the target embedding.
+
+    Attributes
+    ----------
+    perm : (d,) int
+        Source dimension ``c`` is matched with target eigenvector ``perm[c]``.
+    signs : (d,) float
+        +1 or -1 per source dimension.
+    cost : float
+        Mean nearest-neighbour distance from source to configured target.
+    """
+
+    perm: tuple[int, ...]
+    signs: tuple[int, ...]
+    cost: float
+
+    def apply(self, Y: np.ndarray) -> np.ndarray:
+        """Configured target embedding ``Y[:, perm] * signs``, ``(n2, d)``."""
+        return Y[:, list(self.perm)] * np.asarray(self.signs, dtype=float)
+
+    def to_dict(self) -> dict:
+        return {"perm": list(self.perm), "signs": list(self.signs), "cost": self.cost}
+
+
+def _to_target_frame(X: np.ndarray, perm, signs) -> np.ndarray:
+    """Source points expressed in the target's unpermuted frame."""
+    out = np.empty_like(X)
+    out[:, list(perm)] = X * np.asarray(signs, dtype=float)
+    return out
+
+
+def configuration_cost(X: np.ndarray, Y: np.ndarray, perm, signs, tree: cKDTree | None = None) -> float:
+    """Cost of one configuration (see the module docstring).
+
+    Parameters
+    ----------
+    X : (n1, d) float
+        Source embedding.
+    Y : (n2, d) float
+        Target embedding, unconfigured.
+    perm, signs : sequences of length d
+    tree : cKDTree, optional
+        A tree built on ``Y`` to reuse.
+    """
+    tree = cKDTree(Y) if tree is None else tree
+    dist, _ = tree.query(_to_target_frame(X, perm, signs), workers=-1)
+    return float(dist.mean())
+
+
+def _batched_costs(Xs: np.ndarray, tree: cKDTree, configs: list[tuple[tuple, tuple]]) -> np.ndarray:
+    """Costs of many configurations in one KD-tree query."""
+    costs = np.empty(len(configs))
+    chunk = max(1, 2_000_000 // max(1, len(Xs)))
+    for start in range(0, len(configs), chunk):
+        block = configs[start:start + chunk]
+        queries = np.concatenate([_to_target_frame(Xs, p, s) for p, s in block])
+        dist, _ = tree.query(queries, workers=-1)
+        costs[start:start + len(block)] = dist.reshape(len(block), len(Xs)).mean(axis=1)
+    return costs
+
+
+def _rank(X, Y, tree, configs, n_sample, n_rescore, rng, chosen=None) -> list[Configuration]:
+    """Score configurations on samples, re-score the best on all points, rank.
+
+    Pre-scoring uses ``n_sample`` source points against a tree on a random
+    ``2 * n_sample`` (at least 1000) target points: wrong configurations put
+    the queries far from the target, where KD-tree queries are slow, and the
+    small problem keeps the true best few within the re-scored set (measured
+    on TOSCA cat0/cat1: the true top 10 ranked within the first 21 of 3840).
+    ``chosen`` (a heuristic's pick) is put first whatever its cost; the
+    others follow in ascending cost.
+    """
+    configs = list(dict.fromkeys(configs))  # de-duplicate, keep order
+    if len(X) > n_sample and len(configs) > n_rescore:
+        sample = X[rng.choice(len(X), size=n_sample, replace=False)]
+        n_target = min(len(Y), max(1000, 2 * n_sample))
+        small_tree = cKDTree(Y[rng.choice(len(Y), size=n_target, replace=False)])
+        rough = _batched_costs(sample, small_tree, configs)
+        keep = np.argsort(rough, kind="stable")[:n_rescore]
+        configs = [configs[i] for i in keep]
+        if chosen is not None and chosen not in configs:
+            configs.insert(0, chosen)
+    costs = _batched_costs(X, tree, configs)
+    order = list(np.argsort(costs, kind="stable"))
+    if chosen is not None:
+        first = configs.index(chosen)
+        order.remove(first)
+        order.insert(0, first)
+    return [Configuration(tuple(int(v) for v in configs[i][0]), tuple(int(v) for v in configs[i][1]),
+                          float(costs[i])) for i in order]
+
+
+def _all_signs(d: int):
+    return [tuple(s) for s in itertools.product((1, -1), repeat=d)]
+
+
+def _greedy_order(X: np.ndarray, Y: np.ndarray, sample: np.ndarray) -> tuple[tuple, tuple]:
+    """The paper's greedy heuristic: fix two dimensions exhaustively, add one at a time."""
+    d = X.shape[1]
+    Xs = X[sample]
+
+    def cost(perm, signs):
+        m = len(perm)
+        tree = cKDTree(Y[:, list(perm)] * np.asarray(signs, dtype=float))
+        dist, _ = tree.query(Xs[:, :m], workers=-1)
+        return dist.mean()
+
+    m0 = min(2, d)
+    best = min(((p, s) for p in itertools.permutations(range(d), m0) for s in _all_signs(m0)),
+               key=lambda ps: cost(*ps))
+    perm, signs = list(best[0]), list(best[1])
+    for _ in range(m0, d):
+        options = [(perm + [j], signs + [s]) for j in range(d) if j not in perm for s in (1, -1)]
+        perm, signs = min(options, key=lambda ps: cost(*ps))
+    return tuple(perm), tuple(signs)
+
+
+def _greedy_signs(X: np.ndarray, Y: np.ndarray, sample: np.ndarray) -> tuple:
+    """Shapiro & Brady: fix each eigenvector's sign in turn, eigenvalue order kept."""
+    d = X.shape[1]
+    signs: list[int] = []
+    for c in range(d):
+        def cost(s):
+            sg = np.asarray(signs + [s], dtype=float)
+            tree = cKDTree(Y[:, :c + 1] * sg)
+            return tree.query(X[sample, :c + 1], workers=-1)[0].mean()
+        signs.append(min((1, -1), key=cost))
+    return tuple(signs)
+
+
+def rank_configurations(X: np.ndarray, Y: np.ndarray, mode: str = "exhaustive", *,
+                        n_sample: int = 300, n_rescore: int = 64,
+                        random_state: int | None = 0) -> list[Configuration]:
+    """Rank eigenvector permutations and signs of the target embedding.
+
+    Parameters
+    ----------
+    X : (n1, d) float
+        Source embedding (kept fixed).
+    Y : (n2, d) float
+        Target embedding.
+    mode : {"exhaustive", "greedy", "signs", "signs-greedy", "none"}
+        Search strategy (see the module docstring).
+    n_sample : int
+        Source points used to pre-score configurations (exhaustive mode) or
+        to run the greedy steps.
+    n_rescore : int
+        Number of best pre-scored configurations re-scored on every point.
+    random_state : int or None
+        Seed of the source sample.
+
+    Returns
+    -------
+    configurations : list of Configuration
+        Element 0 is the chosen configuration: the cheapest in
+        ``"exhaustive"`` and ``"signs"`` modes, the heuristic's pick in
+        ``"greedy"``, ``"signs-greedy"`` and ``"none"`` modes. The rest follow
+        in ascending cost; element 1 is the runner-up (often the
+        mirror-image map on symmetric shapes).
+    """
+    check_choice("reorder", mode, REORDER_MODES)
+    n_sample = check_int("n_sample", n_sample, minimum=1)
+    n_rescore = check_int("n_rescore", n_rescore, minimum=2)
+    if X.shape[1] != Y.shape[1]:
+        raise ValueError(f"Embeddings have different dimensions: {X.shape[1]} and {Y.shape[1]}.")
+    d = X.shape[1]
+    rng = np.random.default_rng(random_state)
+    tree = cKDTree(Y)
+    identity = tuple(range(d))
+    sample = rng.choice(len(X), size=min(n_sample, len(X)), replace=False)
+    chosen = None
+    if mode == "exhaustive":
+        configs = [(p, s) for p in itertools.permutations(range(d)) for s in _all_signs(d)]
+    elif mode == "greedy":
+        chosen = _greedy_order(X, Y, sample)
+        configs = [chosen] + [(chosen[0], s) for s in _all_signs(d)]
+    elif mode == "signs":
+        configs = [(identity, s) for s in _all_signs(d)]
+    elif mode == "signs-greedy":
+        chosen = (identity, _greedy_signs(X, Y, sample))
+        configs = [chosen] + [(identity, s) for s in _all_signs(d)]
+    else:
+        chosen = (identity, (1,) * d)
+        configs = [chosen] + [(identity, s) for s in _all_signs(d)]
+    return _rank(X, Y, tree, configs, n_sample, n_rescore, rng, chosen)

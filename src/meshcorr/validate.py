@@ -1,0 +1,296 @@
+"""Check that a triangle mesh can be used by meshcorr.
+
+Every check raises :class:`~meshcorr.errors.MeshError` with a message that
+names the problem, how many elements are affected (with the first few
+offending indices) and the fix. All checks are vectorized numpy / scipy.
+
+The checks run in this order: shapes (and emptiness), finite coordinates,
+face index range, degenerate faces, non-manifold faces / edges / vertices,
+unreferenced vertices and connected components, minimum vertex count.
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+from meshcorr.errors import MeshError, ParameterError
+
+__all__ = ["validate_mesh"]
+
+_SHOW = 5  # how many offending indices a message lists
+_AREA_RTOL = 1e-12  # zero area: area <= _AREA_RTOL * bbox_diagonal**2
+_MESHLAB = "MeshLab: Filters > Cleaning and Repairing > "
+
+
+def _which(word: str, words: str, indices) -> str:
+    """``"vertex 3"`` or ``"vertices 3, 7, 9, ..."``: the first few of ``indices``."""
+    indices = np.ravel(indices)
+    shown = ", ".join(str(int(i)) for i in indices[:_SHOW])
+    return f"{word if len(indices) == 1 else words} {shown}{', ...' if len(indices) > _SHOW else ''}"
+
+
+def _plural(count: int, word: str, words: str | None = None) -> str:
+    """``"1 face"``, ``"2 faces"``; ``words`` is the plural when not ``word + "s"``."""
+    return f"{count} {word if count == 1 else (words or word + 's')}"
+
+
+def _as_arrays(vertices, faces, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """Convert to float64 (n, 3) and int64 (m, 3) arrays, checking emptiness and shapes."""
+    vertices = np.asarray(vertices)
+    faces = np.asarray(faces)
+    if vertices.size == 0 or faces.size == 0:
+        what = "no vertices" if vertices.size == 0 else "no faces"
+        raise MeshError(
+            f"{name} is empty: it has {what} ({len(vertices)} vertices, "
+            f"{len(faces)} faces). Check that the file contains a triangle "
+            "mesh and not only a point cloud."
+        )
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        raise MeshError(
+            f"{name}: vertices must have shape (n, 3); got {vertices.shape}. "
+            "Pass one row of x, y, z coordinates per vertex."
+        )
+    if faces.ndim != 2 or faces.shape[1] != 3:
+        raise MeshError(
+            f"{name}: faces must have shape (m, 3); got {faces.shape}. "
+            "faces must be triangles; triangulate polygons first."
+        )
+    if not np.issubdtype(vertices.dtype, np.number) or np.iscomplexobj(vertices):
+        raise MeshError(
+            f"{name}: vertex coordinates must be real numbers; got dtype {vertices.dtype}."
+        )
+    if not np.issubdtype(faces.dtype, np.integer):
+        as_float = faces.astype(np.float64) if np.issubdtype(faces.dtype, np.number) else None
+        if as_float is None or not np.all(np.isfinite(as_float) & (as_float == np.round(as_float))):
+            raise MeshError(
+                f"{name}: face indices must be integers; got dtype {faces.dtype} "
+                "with non-integer values. Pass vertex indices (0-based) as ints."
+            )
+    return np.array(vertices, dtype=np.float64), np.array(faces, dtype=np.int64)
+
+
+def _check_finite(vertices: np.ndarray, name: str) -> None:
+    bad = np.flatnonzero(~np.isfinite(vertices).all(axis=1))
+    if len(bad):
+        raise MeshError(
+            f"{name}: NaN or inf coordinates in {_plural(len(bad), 'vertex', 'vertices')} "
+            f"({_which('vertex', 'vertices', bad)}). "
+            "Remove or repair these vertices before matching."
+        )
+
+
+def _check_index_range(faces: np.ndarray, n_vertices: int, name: str) -> None:
+    bad = np.flatnonzero(((faces < 0) | (faces >= n_vertices)).any(axis=1))
+    if len(bad):
+        values = faces[bad][(faces[bad] < 0) | (faces[bad] >= n_vertices)]
+        raise MeshError(
+            f"{name}: {_plural(len(bad), 'face')} with vertex indices outside "
+            f"[0, {n_vertices - 1}] ({_which('face', 'faces', bad)}; "
+            f"{_which('index', 'indices', values)}). "
+            "Face indices must be 0-based and refer to the given vertices."
+        )
+
+
+def _check_degenerate(vertices: np.ndarray, faces: np.ndarray, name: str) -> None:
+    repeated = (
+        (faces[:, 0] == faces[:, 1]) | (faces[:, 1] == faces[:, 2]) | (faces[:, 2] == faces[:, 0])
+    )
+    corners = vertices[faces]
+    double_area = np.linalg.norm(
+        np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
+    )
+    used = vertices[np.unique(faces)]
+    diagonal = float(np.linalg.norm(used.max(axis=0) - used.min(axis=0)))
+    zero_area = 0.5 * double_area <= _AREA_RTOL * diagonal**2
+    bad = np.flatnonzero(repeated | zero_area)
+    if len(bad):
+        raise MeshError(
+            f"{name}: {_plural(len(bad), 'degenerate face')} "
+            f"({int(repeated.sum())} with a repeated vertex index, "
+            f"{int((zero_area & ~repeated).sum())} with zero area; "
+            f"{_which('face', 'faces', bad)}). "
+            "Remove degenerate faces / clean the mesh first "
+            f"(e.g. {_MESHLAB}Remove Zero Area Faces)."
+        )
+
+
+def _edges(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Undirected edges of every face corner.
+
+    Returns
+    -------
+    edges : (3m, 2) int64
+        Sorted vertex pairs; row ``3 * f + j`` joins corners ``j`` and
+        ``(j + 1) % 3`` of face ``f``.
+    corners : (3m, 2) int64
+        The corner ids (``3 * f + j``) of the two endpoints of each row of ``edges``.
+    """
+    m = len(faces)
+    corner = np.arange(3 * m, dtype=np.int64).reshape(m, 3)
+    a, b = faces.ravel(), faces[:, [1, 2, 0]].ravel()
+    ca, cb = corner.ravel(), corner[:, [1, 2, 0]].ravel()
+    swap = a > b
+    edges = np.column_stack([np.where(swap, b, a), np.where(swap, a, b)])
+    corners = np.column_stack([np.where(swap, cb, ca), np.where(swap, ca, cb)])
+    return edges, corners
+
+
+def _check_manifold(faces: np.ndarray, n_vertices: int, name: str) -> None:
+    fix_edges = f"Repair the mesh first (e.g. {_MESHLAB}Repair non Manifold Edges)."
+    _, first, inverse = np.unique(
+        np.sort(faces, axis=1), axis=0, return_index=True, return_inverse=True
+    )
+    repeats = np.flatnonzero(first[inverse.ravel()] != np.arange(len(faces)))
+    if len(repeats):
+        raise MeshError(
+            f"{name} is non-manifold: {_plural(len(repeats), 'duplicate face')} "
+            f"({_which('face', 'faces', repeats)} repeat{'s' if len(repeats) == 1 else ''} "
+            "the vertices of an earlier face). "
+            f"Remove duplicate faces first (e.g. {_MESHLAB}Remove Duplicate Faces)."
+        )
+    edges, corners = _edges(faces)
+    order = np.lexsort((edges[:, 1], edges[:, 0]))
+    edges, corners = edges[order], corners[order]
+    start = np.flatnonzero(np.r_[True, (edges[1:] != edges[:-1]).any(axis=1)])
+    counts = np.diff(np.r_[start, len(edges)])
+    if (counts > 2).any():
+        bad = edges[start[counts > 2]]
+        shown = ", ".join(f"({i}, {j})" for i, j in bad[:_SHOW])
+        shown += ", ..." if len(bad) > _SHOW else ""
+        raise MeshError(
+            f"{name} is non-manifold: {_plural(len(bad), 'edge')} shared by more than "
+            f"2 faces ({'edge' if len(bad) == 1 else 'edges'} {shown}). {fix_edges}"
+        )
+    # Corners of one vertex in two faces that share an edge containing it are
+    # in the same fan; a vertex whose corners form several fans is non-manifold.
+    shared = start[counts == 2]
+    links = np.concatenate([corners[shared], corners[shared + 1]], axis=1)  # (k, 4)
+    rows = np.concatenate([links[:, 0], links[:, 1]])
+    cols = np.concatenate([links[:, 2], links[:, 3]])
+    n_corners = 3 * len(faces)
+    graph = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n_corners, n_corners))
+    n_fans, labels = connected_components(graph, directed=False)
+    fan_vertex = np.empty(n_fans, dtype=np.int64)
+    fan_vertex[labels] = faces.ravel()
+    bad = np.flatnonzero(np.bincount(fan_vertex, minlength=n_vertices) > 1)
+    if len(bad):
+        raise MeshError(
+            f"{name} is non-manifold: {_plural(len(bad), 'vertex', 'vertices')} "
+            "where separate sheets of faces touch at a single point "
+            f"({_which('vertex', 'vertices', bad)}). "
+            f"Repair the mesh first (e.g. {_MESHLAB}Repair non Manifold Vertices)."
+        )
+
+
+def _select_component(
+    vertices: np.ndarray, faces: np.ndarray, largest_component: bool, name: str
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    n = len(vertices)
+    referenced = np.bincount(faces.ravel(), minlength=n) > 0
+    edges, _ = _edges(faces)
+    graph = sp.coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    _, labels = connected_components(graph, directed=False)
+    used_labels, sizes = np.unique(labels[referenced], return_counts=True)
+    unreferenced = np.flatnonzero(~referenced)
+    if not largest_component and len(unreferenced):
+        raise MeshError(
+            f"{name}: {_plural(len(unreferenced), 'vertex', 'vertices')} "
+            f"used by no face ({_which('vertex', 'vertices', unreferenced)}). "
+            "Remove unreferenced vertices "
+            f"(e.g. {_MESHLAB}Remove Unreferenced Vertices), or pass --largest-component "
+            "(CLI) / largest_component=True (API) to drop them."
+        )
+    if not largest_component and len(sizes) > 1:
+        listed = ", ".join(str(s) for s in np.sort(sizes)[::-1][:_SHOW])
+        raise MeshError(
+            f"{name} has {len(sizes)} connected components (vertex counts, largest first: "
+            f"{listed}{', ...' if len(sizes) > _SHOW else ''}); a correspondence needs a "
+            "single connected surface. Pass --largest-component (CLI) / "
+            "largest_component=True (API) to keep only the largest one."
+        )
+    if len(sizes) == 1 and not len(unreferenced):
+        return vertices, faces, np.arange(n, dtype=np.int64)
+    # Ties go to the component holding the lowest vertex index (np.argmax is first).
+    best = used_labels[np.argmax(sizes)]
+    kept = np.flatnonzero((labels == best) & referenced).astype(np.int64)
+    new_index = np.full(n, -1, dtype=np.int64)
+    new_index[kept] = np.arange(len(kept))
+    new_faces = new_index[faces[labels[faces[:, 0]] == best]]
+    return vertices[kept], new_faces, kept
+
+
+def validate_mesh(
+    vertices,
+    faces,
+    *,
+    min_vertices: int = 3,
+    largest_component: bool = False,
+    name: str = "mesh",
+    reason: str | None = None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Check a triangle mesh and return clean arrays, optionally its largest component.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+        Vertex coordinates.
+    faces : (m, 3) int
+        Triangles as 0-based vertex indices.
+    min_vertices : int, default 3
+        Fewest vertices the (selected) mesh may have.
+    largest_component : bool, default False
+        If True, keep only the connected component with the most vertices
+        (ties: the one holding the lowest vertex index) and drop the others and
+        any unreferenced vertices instead of raising.
+    name : str, default "mesh"
+        How messages refer to the mesh (e.g. a file name).
+    reason : str, optional
+        Why ``min_vertices`` are needed, quoted in the message, e.g.
+        ``"the spectral embedding with k=30 needs at least 31 vertices"``.
+
+    Returns
+    -------
+    vertices : (n', 3) float64
+        A copy of the kept vertices, in their original order.
+    faces : (m', 3) int64
+        The kept faces, reindexed into the kept vertices.
+    kept : (n',) int64
+        Original index of each kept vertex (``arange(n)`` when nothing is
+        dropped), so ``vertices == original_vertices[kept]``.
+
+    Raises
+    ------
+    MeshError
+        If the mesh is empty, not (n, 3) / (m, 3), has NaN or inf coordinates,
+        out-of-range indices, degenerate or duplicate faces, non-manifold edges
+        or vertices, unreferenced vertices or several components (unless
+        ``largest_component``), or fewer than ``min_vertices`` vertices.
+    ParameterError
+        If ``min_vertices`` is not an int >= 1.
+    """
+    if (
+        not isinstance(min_vertices, numbers.Integral)
+        or isinstance(min_vertices, bool)
+        or min_vertices < 1
+    ):
+        raise ParameterError(
+            "The 'min_vertices' parameter of validate_mesh must be an int >= 1. "
+            f"Got {min_vertices!r} instead."
+        )
+    vertices, faces = _as_arrays(vertices, faces, name)
+    _check_finite(vertices, name)
+    _check_index_range(faces, len(vertices), name)
+    _check_degenerate(vertices, faces, name)
+    _check_manifold(faces, len(vertices), name)
+    vertices, faces, kept = _select_component(vertices, faces, largest_component, name)
+    if len(vertices) < min_vertices:
+        why = f" ({reason})" if reason else ""
+        raise MeshError(
+            f"{name} has {len(vertices)} vertices but at least {min_vertices} are "
+            f"needed{why}. Use a finer mesh or lower the parameter that needs them."
+        )
+    return vertices, faces, kept

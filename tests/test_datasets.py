@@ -1,0 +1,320 @@
+"""Tests of the synthetic shapes and their ground truth (meshcorr.datasets)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+from scipy.spatial import cKDTree
+
+from meshcorr import datasets
+from meshcorr.datasets import SyntheticShape, figure, ground_truth, rigid_copy, sphere, tube
+from meshcorr.errors import ParameterError
+
+# two resolutions x two poses for each generator
+TUBES = {
+    ("coarse", "straight"): dict(n_along=12, n_around=14),
+    ("coarse", "bent"): dict(n_along=12, n_around=14, bend=np.pi / 2),
+    ("fine", "straight"): dict(n_along=60, n_around=24),
+    ("fine", "bent"): dict(n_along=60, n_around=24, bend=-np.pi),
+}
+FIGURES = {
+    ("coarse", "rest"): dict(resolution=1, pose="rest"),
+    ("coarse", "curled"): dict(resolution=1, pose="curled"),
+    ("fine", "rest"): dict(resolution=3, pose="rest"),
+    ("fine", "bent"): dict(resolution=3, pose="bent"),
+}
+CASES = [(tube, kw) for kw in TUBES.values()] + [(figure, kw) for kw in FIGURES.values()]
+CASE_IDS = [f"tube-{a}-{b}" for a, b in TUBES] + [f"figure-{a}-{b}" for a, b in FIGURES]
+
+
+def _mesh(shape: SyntheticShape) -> trimesh.Trimesh:
+    return trimesh.Trimesh(shape.vertices, shape.faces, process=False)
+
+
+def _edge_lengths(shape: SyntheticShape, edges: np.ndarray) -> np.ndarray:
+    return np.linalg.norm(shape.vertices[edges[:, 0]] - shape.vertices[edges[:, 1]], axis=1)
+
+
+def _chart_points(shape: SyntheticShape) -> np.ndarray:
+    t = shape.params[:, 0]
+    return datasets._chart_embedding(shape.params, t.min(), t.max())
+
+
+@pytest.mark.parametrize(("make", "kwargs"), CASES, ids=CASE_IDS)
+def test_closed_oriented_manifold(make, kwargs):
+    shape = make(**kwargs)
+    mesh = _mesh(shape)
+    assert shape.vertices.dtype == np.float64 and shape.vertices.shape[1] == 3
+    assert shape.faces.dtype == np.int64 and shape.params.shape == (shape.n_vertices, 2)
+    assert mesh.is_watertight  # every edge in exactly two faces
+    assert mesh.is_winding_consistent
+    assert mesh.volume > 0  # outward normals
+    assert mesh.body_count == 1
+    assert mesh.euler_number == 2  # a sphere topologically
+    assert len(np.unique(shape.faces.ravel())) == shape.n_vertices  # no unused vertex
+    assert len(np.unique(np.sort(shape.faces, axis=1), axis=0)) == len(shape.faces)
+    assert np.degrees(mesh.face_angles.min()) > 5.0  # no degenerate or sliver face
+
+
+@pytest.mark.parametrize(("make", "kwargs"), CASES, ids=CASE_IDS)
+def test_no_self_contact(make, kwargs):
+    # Vertices far apart on the surface (in the chart) must not come close in space.
+    shape = make(**kwargs)
+    chart = _chart_points(shape)
+    pairs = cKDTree(shape.vertices).query_pairs(0.1, output_type="ndarray")
+    far = np.linalg.norm(chart[pairs[:, 0]] - chart[pairs[:, 1]], axis=1) > 0.5
+    assert not far.any()
+
+
+def test_vertex_count_range():
+    small = tube(n_along=12, n_around=14)
+    large = tube(n_along=200, n_around=80)
+    assert 150 <= small.n_vertices <= 250
+    assert 18_000 <= large.n_vertices <= 22_000
+    assert [figure(resolution=r).n_vertices for r in (1, 2, 3, 4)] == [448, 832, 1274, 1844]
+
+
+@pytest.mark.parametrize(
+    ("first", "second"),
+    [
+        (lambda: tube(bend=0.0), lambda: tube(bend=np.pi / 2)),
+        (lambda: figure(resolution=2, pose="rest"), lambda: figure(resolution=2, pose="bent")),
+        (lambda: figure(resolution=2, pose="curled"), lambda: figure(resolution=2, pose=-0.5)),
+    ],
+    ids=["tube", "figure-rest-bent", "figure-curled-float"],
+)
+def test_poses_share_connectivity_and_chart(first, second):
+    a, b = first(), second()
+    np.testing.assert_array_equal(a.faces, b.faces)
+    np.testing.assert_array_equal(a.params, b.params)
+    assert not np.allclose(a.vertices, b.vertices)  # the pose did change the geometry
+    np.testing.assert_array_equal(ground_truth(a, b), np.arange(a.n_vertices))
+
+
+def test_deterministic_and_seeded():
+    np.testing.assert_array_equal(figure(random_state=3).vertices, figure(random_state=3).vertices)
+    assert not np.array_equal(figure(random_state=3).params, figure(random_state=4).params)
+    # the seed only jitters the vertices within the chart: same counts, moved vertices
+    jittered, regular = tube(random_state=1), tube(random_state=None)
+    assert jittered.faces.shape == regular.faces.shape
+    assert jittered.n_vertices == regular.n_vertices
+
+
+def test_arrays_are_read_only():
+    shape = tube()
+    with pytest.raises(ValueError):
+        shape.vertices[0, 0] = 1.0
+
+
+@pytest.mark.parametrize("shape", [tube(), figure(resolution=2, pose="bent")], ids=["tube", "figure"])
+def test_ground_truth_to_itself_is_identity(shape):
+    truth = ground_truth(shape, shape)
+    assert truth.dtype == np.int64
+    np.testing.assert_array_equal(truth, np.arange(shape.n_vertices))
+    # the nearest-neighbour path (no shortcut) agrees: a copy with perturbed params order
+    copy, perm = rigid_copy(shape, random_state=5)
+    np.testing.assert_array_equal(ground_truth(shape, copy), perm)
+
+
+@pytest.mark.parametrize(
+    ("source", "target"),
+    [
+        (tube(n_along=40, n_around=16), tube(n_along=25, n_around=12, random_state=3)),
+        (tube(n_along=25, n_around=12, random_state=3), tube(n_along=40, n_around=16)),
+        (figure(resolution=2), figure(resolution=3, random_state=1)),
+        (figure(resolution=3), figure(resolution=1)),
+    ],
+    ids=["tube-fine-coarse", "tube-coarse-fine", "figure-2-3", "figure-3-1"],
+)
+def test_ground_truth_across_resolutions_is_close_in_space(source, target):
+    truth = ground_truth(source, target)
+    assert source.n_vertices != target.n_vertices
+    mean_edge = _mesh(target).edges_unique_length.mean()
+    distance = np.linalg.norm(source.vertices - target.vertices[truth], axis=1)
+    assert distance.max() < 1.5 * mean_edge
+    assert distance.mean() < 0.5 * mean_edge
+
+
+def test_ground_truth_handles_periodic_theta():
+    # a point at theta = 2 pi - 0.001 must match the vertex at theta = 0 of its ring
+    shape = tube(random_state=None)
+    at_zero = np.flatnonzero((shape.params[:, 1] == 0.0) & (shape.params[:, 0] > 1.0))[0]
+    t_ring = shape.params[at_zero, 0]
+    t_min, t_max = shape.params[:, 0].min(), shape.params[:, 0].max()
+    probe = SyntheticShape(
+        vertices=np.zeros((3, 3)),
+        faces=np.zeros((0, 3)),
+        params=[[t_ring, 2 * np.pi - 1e-3], [t_min, 0.0], [t_max, 0.0]],
+        name="probe",
+    )
+    assert ground_truth(probe, shape)[0] == at_zero
+
+
+def test_rigid_copy_truth():
+    shape = figure(resolution=2, pose="bent")
+    angle = 0.7
+    rotation = np.array(
+        [[np.cos(angle), -np.sin(angle), 0.0], [np.sin(angle), np.cos(angle), 0.0], [0.0, 0.0, 1.0]]
+    )
+    copy, truth = rigid_copy(shape, rotation=rotation, translation=[1.0, -2.0, 3.0], scale=2.5)
+    expected = 2.5 * shape.vertices @ rotation.T + np.array([1.0, -2.0, 3.0])
+    np.testing.assert_allclose(copy.vertices[truth], expected, rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(copy.faces, truth[shape.faces])
+    np.testing.assert_array_equal(copy.params[truth], shape.params)
+    np.testing.assert_array_equal(np.sort(truth), np.arange(shape.n_vertices))
+    assert not np.array_equal(truth, np.arange(shape.n_vertices))
+    np.testing.assert_allclose(_mesh(copy).volume, 2.5**3 * _mesh(shape).volume, rtol=1e-10)
+
+
+def test_rigid_copy_random_defaults_are_seeded():
+    shape = tube(n_along=12, n_around=14)
+    copy_a, truth_a = rigid_copy(shape, random_state=7)
+    copy_b, truth_b = rigid_copy(shape, random_state=7)
+    np.testing.assert_array_equal(truth_a, truth_b)
+    np.testing.assert_array_equal(copy_a.vertices, copy_b.vertices)
+    # the random motion is rigid: pairwise distances are kept
+    pairs = np.array([[0, 5], [3, 100], [17, 150]])
+    np.testing.assert_allclose(
+        _edge_lengths(copy_a, truth_a[pairs]), _edge_lengths(shape, pairs), rtol=1e-12
+    )
+    same, identity = rigid_copy(shape, permute=False)
+    np.testing.assert_array_equal(identity, np.arange(shape.n_vertices))
+    np.testing.assert_array_equal(same.faces, shape.faces)
+
+
+def test_bending_is_near_isometric():
+    straight, bent = tube(), tube(bend=np.pi / 2)
+    edges = _mesh(straight).edges_unique
+    before, after = _edge_lengths(straight, edges), _edge_lengths(bent, edges)
+    change = np.abs(after - before) / before
+    assert np.median(change) < 0.05
+    # edges around the tube are carried rigidly; along it, stretch and squeeze cancel
+    along = np.abs(np.diff(straight.params[edges, 0], axis=1)[:, 0]) > 0.05
+    np.testing.assert_allclose(after[along].sum(), before[along].sum(), rtol=0.01)
+    # Pappus: bending a tube along a circular arc keeps its volume
+    plain = [tube(bumps=False, bend=b) for b in (0.0, np.pi / 2)]
+    np.testing.assert_allclose(_mesh(plain[1]).volume, _mesh(plain[0]).volume, rtol=1e-3)
+
+
+def test_figure_poses_move_only_the_joints():
+    rest, bent = figure(resolution=2, pose="rest"), figure(resolution=2, pose="bent")
+    edges = _mesh(rest).edges_unique
+    before, after = _edge_lengths(rest, edges), _edge_lengths(bent, edges)
+    change = np.abs(after - before) / before
+    assert np.median(change) < 1e-9  # the parts between hinges move rigidly
+    assert np.mean(change) < 0.08
+    np.testing.assert_allclose(_mesh(bent).volume, _mesh(rest).volume, rtol=0.01)
+
+
+def _radial_profile(shape: SyntheticShape, length: float) -> np.ndarray:
+    """Distance of each vertex of a straight shape from its centre line (the x axis)."""
+    x = np.clip(shape.vertices[:, 0], 0.0, length)
+    return np.linalg.norm(shape.vertices - np.column_stack([x, 0 * x, 0 * x]), axis=1)
+
+
+def _best_symmetry_mismatch(shape: SyntheticShape, length: float) -> float:
+    """Smallest worst-case change of the radial profile under candidate chart symmetries.
+
+    Candidates: end-to-end reversal, mirror theta -> c - theta and rotation
+    theta -> theta + c (c on a 10-degree grid), and their combinations; pure
+    rotations by less than 30 degrees are too close to the identity to count.
+    """
+    t_min, t_max = shape.params[:, 0].min(), shape.params[:, 0].max()
+    rho = _radial_profile(shape, length)
+    tree = cKDTree(_chart_points(shape))
+    t, theta = shape.params.T
+    worst = []
+    for reverse in (False, True):
+        for mirror in (False, True):
+            for c in np.radians(np.arange(0, 360, 10)):
+                if not (reverse or mirror) and min(c, 2 * np.pi - c) < np.radians(30):
+                    continue
+                mapped = np.column_stack([
+                    t_min + t_max - t if reverse else t,
+                    c - theta if mirror else theta + c,
+                ])
+                _, j = tree.query(datasets._chart_embedding(mapped, t_min, t_max))
+                worst.append(np.abs(rho - rho[j]).max())
+    return min(worst)
+
+
+def test_bumped_shapes_have_no_symmetry():
+    plain = tube(bumps=False, random_state=None)
+    assert _best_symmetry_mismatch(plain, 4.0) < 1e-12  # control: a plain capsule is symmetric
+    assert _best_symmetry_mismatch(tube(random_state=None), 4.0) > 0.1 * 0.5
+    assert _best_symmetry_mismatch(figure(resolution=2, random_state=None), 7.0) > 0.1 * 0.45
+
+
+def test_ends_differ():
+    def end_profiles(shape):
+        ends = [np.argmin(shape.params[:, 0]), np.argmax(shape.params[:, 0])]
+        return [np.sort(np.linalg.norm(shape.vertices - shape.vertices[e], axis=1)) for e in ends]
+
+    start, end = end_profiles(tube(bumps=False, random_state=None))
+    np.testing.assert_allclose(start, end, rtol=0, atol=1e-12)
+    start, end = end_profiles(tube(random_state=None))
+    assert np.abs(start - end).max() > 0.02
+    start, end = end_profiles(figure(random_state=None))
+    assert np.abs(start - end).mean() > 0.1
+
+
+def test_sphere():
+    vertices, faces = sphere(subdivisions=3, radius=2.0)
+    assert vertices.shape == (642, 3) and faces.dtype == np.int64
+    np.testing.assert_allclose(np.linalg.norm(vertices, axis=1), 2.0, rtol=1e-14)
+    mesh = trimesh.Trimesh(vertices, faces, process=False)
+    assert mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0
+
+
+def test_save_example_pair(tmp_path):
+    source_path, target_path, truth_path = datasets.save_example_pair(tmp_path / "ex")
+    assert [p.name for p in (source_path, target_path, truth_path)] == [
+        "figure_rest.off", "figure_bent.off", "figure_rest_to_bent.gt.txt",
+    ]
+    source = figure(resolution=2, pose="rest")
+    target = figure(resolution=3, pose="bent", random_state=1)
+    for shape, path in ((source, source_path), (target, target_path)):
+        loaded = trimesh.load(path, process=False)
+        np.testing.assert_allclose(loaded.vertices, shape.vertices, rtol=0, atol=1e-8)
+        np.testing.assert_array_equal(loaded.faces, shape.faces)
+    truth = np.loadtxt(truth_path, dtype=np.int64)
+    np.testing.assert_array_equal(truth, ground_truth(source, target))
+    total = sum(p.stat().st_size for p in (source_path, target_path, truth_path))
+    assert total < 300_000
+
+
+@pytest.mark.parametrize(
+    ("call", "match"),
+    [
+        (lambda: tube(n_along=1), "'n_along' parameter of tube must be an int >= 2"),
+        (lambda: tube(n_along=10.0), "'n_along' parameter of tube"),
+        (lambda: tube(n_around=2), "'n_around' parameter of tube must be an int >= 3"),
+        (lambda: tube(length=0.0), "'length' parameter of tube must be a finite float > 0"),
+        (lambda: tube(radius=np.nan), "'radius' parameter of tube"),
+        (lambda: tube(bend=4.0), "'bend' parameter of tube"),
+        (lambda: tube(length=1.0, bend=1.5), "'bend' parameter of tube"),
+        (lambda: tube(bumps=1), "'bumps' parameter of tube must be a bool"),
+        (lambda: tube(random_state=-1), "'random_state' parameter of tube"),
+        (lambda: tube(random_state=1.5), "'random_state' parameter of tube"),
+        (lambda: figure(resolution=0), "'resolution' parameter of figure must be an int >= 1"),
+        (lambda: figure(pose="dancing"), "'pose' parameter of figure must be one of"),
+        (lambda: figure(pose=1.5), "'pose' parameter of figure"),
+        (lambda: figure(pose=True), "'pose' parameter of figure"),
+        (lambda: figure(random_state="0"), "'random_state' parameter of figure"),
+        (lambda: sphere(subdivisions=8), r"'subdivisions' parameter of sphere must be an int in \[0, 7\]"),
+        (lambda: sphere(radius=-1.0), "'radius' parameter of sphere"),
+        (lambda: ground_truth(tube(), tube(length=5.0)), "one family"),
+        (lambda: ground_truth(tube(), figure()), "one family"),
+        (lambda: ground_truth(np.zeros((3, 3)), tube()), "'source' parameter of ground_truth"),
+        (lambda: rigid_copy(tube(), rotation=np.diag([1.0, 1.0, -1.0])), "'rotation' parameter"),
+        (lambda: rigid_copy(tube(), rotation=2 * np.eye(3)), "'rotation' parameter"),
+        (lambda: rigid_copy(tube(), translation=[1.0, 2.0]), "'translation' parameter"),
+        (lambda: rigid_copy(tube(), scale=-1.0), "'scale' parameter of rigid_copy"),
+        (lambda: rigid_copy(tube(), permute="yes"), "'permute' parameter of rigid_copy"),
+        (lambda: rigid_copy(tube(), random_state=-3), "'random_state' parameter of rigid_copy"),
+    ],
+)
+def test_invalid_parameters_raise(call, match):
+    with pytest.raises(ParameterError, match=match):
+        call()

@@ -1,0 +1,355 @@
+"""Tests for meshcorr.io: mesh reading keeps vertex order, errors and warnings, map files."""
+
+from __future__ import annotations
+
+import os
+import warnings
+
+import numpy as np
+import pytest
+import trimesh
+
+from meshcorr import io as mio
+from meshcorr.errors import MeshError, MeshWarning, ParameterError
+from meshcorr.io import atomic_write, read_map, read_mesh, write_map, write_mesh
+
+OCTA_V = np.array(
+    [[1.0, 0, 0], [-1.0, 0, 0], [0, 1.0, 0], [0, -1.0, 0], [0, 0, 1.0], [0, 0, -1.0]]
+)
+OCTA_F = np.array(
+    [[0, 2, 4], [2, 1, 4], [1, 3, 4], [3, 0, 4], [2, 0, 5], [1, 2, 5], [3, 1, 5], [0, 3, 5]]
+)
+
+# two unit squares side by side, as two quads
+QUAD_OFF = """OFF
+# two quads
+6 2 0
+0 0 0
+1 0 0
+1 1 0
+0 1 0
+2 0 0
+2 1 0
+4 0 1 2 3
+4 1 4 5 2
+"""
+QUAD_OBJ = """v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+v 2 0 0
+v 2 1 0
+f 1 2 3 4
+f 2 5 6 3
+"""
+QUAD_PLY = """ply
+format ascii 1.0
+element vertex 6
+property float x
+property float y
+property float z
+element face 2
+property list uchar int vertex_indices
+end_header
+0 0 0
+1 0 0
+1 1 0
+0 1 0
+2 0 0
+2 1 0
+4 0 1 2 3
+4 1 4 5 2
+"""
+
+
+def shuffled_octahedron(seed=0):
+    """An octahedron with vertices in a random order and coordinates exact in float32 and text."""
+    rng = np.random.default_rng(seed)
+    perm = rng.permutation(6)
+    vertices = OCTA_V[perm] * 1.5 + np.array([0.125, -2.25, 3.5])
+    inverse = np.argsort(perm)
+    return vertices, inverse[OCTA_F]
+
+
+def export(tmp_path, vertices, faces, ext):
+    path = tmp_path / f"mesh.{ext}"
+    trimesh.Trimesh(vertices, faces, process=False).export(path)
+    return path
+
+
+@pytest.mark.parametrize("ext", ["off", "obj", "ply"])
+def test_round_trip_keeps_vertex_order(tmp_path, ext):
+    vertices, faces = shuffled_octahedron()
+    path = export(tmp_path, vertices, faces, ext)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        v, f = read_mesh(path)
+    assert v.dtype == np.float64 and f.dtype == np.int64
+    np.testing.assert_array_equal(v, vertices)
+    np.testing.assert_array_equal(f, faces)
+
+
+def test_textured_obj_keeps_vertex_order(tmp_path):
+    # texture seams (several vt per v) would make trimesh split and reorder vertices
+    vertices, faces = shuffled_octahedron(seed=1)
+    lines = [f"v {x} {y} {z}" for x, y, z in vertices]
+    lines += [f"vt {u} {u}" for u in (0.0, 0.25, 0.5, 0.75)]
+    for k, face in enumerate(faces):
+        lines.append("f " + " ".join(f"{i + 1}/{(k + j) % 4 + 1}" for j, i in enumerate(face)))
+    path = tmp_path / "textured.obj"
+    path.write_text("\n".join(lines) + "\n")
+    v, f = read_mesh(path)
+    np.testing.assert_array_equal(v, vertices)
+    np.testing.assert_array_equal(f, faces)
+
+
+def test_textured_obj_trailing_unused_vertex_warns(tmp_path):
+    lines = [f"v {x} {y} {z}" for x, y, z in OCTA_V] + ["v 9 9 9", "vt 0 0", "vt 1 1"]
+    lines += ["f " + " ".join(f"{i + 1}/{(i % 2) + 1}" for i in face) for face in OCTA_F]
+    path = tmp_path / "trailing.obj"
+    path.write_text("\n".join(lines) + "\n")
+    with pytest.warns(MeshWarning, match="1 trailing vertices used by no face were dropped"):
+        v, f = read_mesh(path)
+    np.testing.assert_array_equal(v, OCTA_V)
+    np.testing.assert_array_equal(f, OCTA_F)
+
+
+def test_stl_merges_duplicate_vertices(tmp_path):
+    path = export(tmp_path, OCTA_V, OCTA_F, "stl")
+    v, f = read_mesh(path)
+    assert v.shape == (6, 3)
+    assert f.shape == (8, 3)
+    # the same triangles, as sets of corner coordinates
+    def triangles(vv, ff):
+        return sorted(tuple(sorted(map(tuple, vv[face].round(6)))) for face in ff)
+    assert triangles(v, f) == triangles(OCTA_V, OCTA_F)
+
+
+@pytest.mark.parametrize("name, text", [("quad.off", QUAD_OFF), ("quad.obj", QUAD_OBJ)])
+def test_quads_warn_with_exact_count(tmp_path, name, text):
+    path = tmp_path / name
+    path.write_text(text)
+    with pytest.warns(MeshWarning, match="2 polygonal faces with more than 3 sides were triangulated"):
+        v, f = read_mesh(path)
+    assert f.shape == (4, 3)
+    np.testing.assert_array_equal(v[:, :2], [[0, 0], [1, 0], [1, 1], [0, 1], [2, 0], [2, 1]])
+
+
+def test_quads_warn_with_one_line_off_header(tmp_path):
+    path = tmp_path / "quad.off"
+    path.write_text(QUAD_OFF.replace("OFF\n# two quads\n6 2 0\n", "OFF 6 2 0\n"))
+    with pytest.warns(MeshWarning, match="^quad.off: 2 polygonal faces"):
+        read_mesh(path, name="quad.off")
+
+
+def test_quads_in_ply_warn(tmp_path):
+    path = tmp_path / "quad.ply"
+    path.write_text(QUAD_PLY)
+    with pytest.warns(MeshWarning, match=r"polygonal faces .* \(2 faces in the file became 4 triangles\)"):
+        read_mesh(path)
+
+
+def test_mixed_triangles_and_pentagon_obj_counts_polygons(tmp_path):
+    text = QUAD_OBJ.replace("f 1 2 3 4\nf 2 5 6 3\n", "f 1 2 3\nf 1 3 4\nf 2 5 6 3\n")
+    path = tmp_path / "mixed.obj"
+    path.write_text(text)
+    with pytest.warns(MeshWarning, match=r"^mixed.obj: 1 polygonal faces"):
+        read_mesh(path, name="mixed.obj")
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(MeshError, match="No such file: .*nothere.off"):
+        read_mesh(tmp_path / "nothere.off")
+
+
+def test_directory_is_not_a_file(tmp_path):
+    with pytest.raises(MeshError, match="Not a file"):
+        read_mesh(tmp_path)
+
+
+@pytest.mark.parametrize("name", ["mesh.xyz", "mesh"])
+def test_unsupported_extension(tmp_path, name):
+    path = tmp_path / name
+    path.write_text("0 0 0\n")
+    with pytest.raises(MeshError, match=r"Unsupported mesh format .*supported: \.off, \.obj, \.ply, \.stl"):
+        read_mesh(path)
+
+
+@pytest.mark.parametrize(
+    "name, content, fmt",
+    [
+        ("bad.off", "OFF\n3 1 0\n0 0 0\n1 zz 0\n0 1 0\n3 0 1 2\n", "OFF"),
+        ("truncated.off", "OFF\n5 2 0\n0 0 0\n1 0 0\n", "OFF"),
+        ("bad.ply", "garbage\x00\x01 not a ply", "PLY"),
+    ],
+)
+def test_corrupt_file(tmp_path, name, content, fmt):
+    path = tmp_path / name
+    path.write_bytes(content.encode("latin-1"))
+    with pytest.raises(MeshError, match=f"could not be parsed as {fmt}"):
+        read_mesh(path)
+
+
+def test_truncated_binary_ply(tmp_path):
+    path = export(tmp_path, OCTA_V, OCTA_F, "ply")
+    path.write_bytes(path.read_bytes()[:-20])
+    with pytest.raises(MeshError, match="could not be parsed as PLY"):
+        read_mesh(path)
+
+
+@pytest.mark.parametrize("name", ["empty.off", "empty.obj", "empty.ply", "empty.stl"])
+def test_empty_file(tmp_path, name):
+    path = tmp_path / name
+    path.write_text("  \n")
+    with pytest.raises(MeshError, match="File is empty"):
+        read_mesh(path)
+
+
+def test_point_cloud_has_no_faces(tmp_path):
+    path = tmp_path / "points.obj"
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n")
+    with pytest.raises(MeshError, match="contains no triangle faces"):
+        read_mesh(path)
+
+
+def test_several_geometries(tmp_path):
+    text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nusemtl a\nf 1 3 2\nf 1 2 4\nusemtl b\nf 2 3 4\nf 1 4 3\n"
+    path = tmp_path / "two.obj"
+    path.write_text(text)
+    with pytest.raises(MeshError, match="holds 2 separate geometries"):
+        read_mesh(path)
+
+
+def test_vertex_count_mismatch_is_an_error(tmp_path, monkeypatch):
+    path = export(tmp_path, OCTA_V, OCTA_F, "off")
+    merged = trimesh.Scene(trimesh.Trimesh(OCTA_V[:5], OCTA_F[:4], process=False))
+    monkeypatch.setattr(mio.trimesh, "load", lambda *args, **kwargs: merged)
+    with pytest.raises(MeshError, match="declares 6 vertices but 5 were read"):
+        read_mesh(path)
+
+
+def test_name_is_used_in_messages(tmp_path):
+    path = tmp_path / "bad.off"
+    path.write_text("OFF\n3 1 0\nx y z\n")
+    with pytest.raises(MeshError, match="^source mesh: the file could not be parsed as OFF"):
+        read_mesh(path, name="source mesh")
+
+
+@pytest.mark.parametrize("name", ["map.txt", "map.map", "map", "map.npy"])
+def test_map_round_trip(tmp_path, name):
+    mapping = np.array([3, 0, 2, 2, 1, 123456789])
+    path = tmp_path / name
+    write_map(path, mapping)
+    result = read_map(path)
+    assert result.dtype == np.int64
+    np.testing.assert_array_equal(result, mapping)
+    assert sorted(os.listdir(tmp_path)) == [name]
+
+
+def test_text_map_format(tmp_path):
+    write_map(tmp_path / "m.txt", np.array([4, 0, 7], dtype=np.int32))
+    assert (tmp_path / "m.txt").read_text() == "4\n0\n7\n"
+
+
+def test_npy_map_format(tmp_path):
+    write_map(tmp_path / "m.npy", [4, 0, 7])
+    np.testing.assert_array_equal(np.load(tmp_path / "m.npy"), [4, 0, 7])
+
+
+def test_read_map_missing(tmp_path):
+    with pytest.raises(ParameterError, match="No such file"):
+        read_map(tmp_path / "missing.txt")
+
+
+def test_read_map_non_integer_text(tmp_path):
+    path = tmp_path / "m.txt"
+    path.write_text("1\n\n2.5\n3\n")
+    with pytest.raises(ParameterError, match=r"line 3: expected one integer per line, got '2.5'"):
+        read_map(path)
+
+
+def test_read_map_non_integer_npy(tmp_path):
+    path = tmp_path / "m.npy"
+    np.save(path, np.array([0.5, 1.0]))
+    with pytest.raises(ParameterError, match="1-D integer array"):
+        read_map(path)
+
+
+def test_read_map_corrupt_npy(tmp_path):
+    path = tmp_path / "m.npy"
+    path.write_bytes(b"not numpy")
+    with pytest.raises(ParameterError, match="could not be read as a .npy array"):
+        read_map(path)
+
+
+def test_write_map_rejects_non_integer(tmp_path):
+    with pytest.raises(ParameterError, match="1-D integer array"):
+        write_map(tmp_path / "m.txt", np.array([[1, 2], [3, 4]]))
+    with pytest.raises(ParameterError, match="1-D integer array"):
+        write_map(tmp_path / "m.txt", np.array([1.5, 2.0]))
+    assert os.listdir(tmp_path) == []
+
+
+def test_atomic_write_failure_leaves_nothing(tmp_path):
+    def writer(file):
+        file.write(b"partial")
+        raise RuntimeError("disk full")
+
+    with pytest.raises(RuntimeError, match="disk full"):
+        atomic_write(tmp_path / "out.bin", writer)
+    assert os.listdir(tmp_path) == []
+
+
+def test_atomic_write_failure_keeps_old_file(tmp_path):
+    path = tmp_path / "out.txt"
+    path.write_bytes(b"old")
+
+    def writer(file):
+        file.write(b"new but broken")
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        atomic_write(path, writer)
+    assert path.read_bytes() == b"old"
+    assert os.listdir(tmp_path) == ["out.txt"]
+
+
+def test_atomic_write_replaces_file(tmp_path):
+    path = tmp_path / "out.txt"
+    path.write_bytes(b"old")
+    atomic_write(path, lambda file: file.write(b"new"))
+    assert path.read_bytes() == b"new"
+    assert os.listdir(tmp_path) == ["out.txt"]
+
+
+def test_atomic_write_missing_directory(tmp_path):
+    with pytest.raises(ParameterError, match="does not exist"):
+        atomic_write(tmp_path / "no" / "out.txt", lambda file: file.write(b"x"))
+
+
+@pytest.mark.parametrize("ext", ["off", "obj", "ply", "stl"])
+def test_write_mesh_round_trip(tmp_path, ext):
+    vertices, faces = shuffled_octahedron(seed=2)
+    path = tmp_path / f"out.{ext}"
+    write_mesh(path, vertices, faces)
+    v, f = read_mesh(path)
+    if ext == "stl":
+        assert v.shape == (6, 3) and f.shape == (8, 3)
+    else:
+        np.testing.assert_array_equal(v, vertices)
+        np.testing.assert_array_equal(f, faces)
+    assert os.listdir(tmp_path) == [f"out.{ext}"]
+
+
+def test_write_mesh_ply_keeps_colors(tmp_path):
+    colors = np.array([[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 255, 255]] * 2, dtype=np.uint8)
+    path = tmp_path / "colored.ply"
+    write_mesh(path, OCTA_V, OCTA_F, vertex_colors=colors)
+    loaded = trimesh.load(path, process=False)
+    np.testing.assert_array_equal(loaded.visual.vertex_colors, colors)
+    np.testing.assert_array_equal(loaded.vertices, OCTA_V)
+
+
+def test_write_mesh_unsupported_extension(tmp_path):
+    with pytest.raises(ParameterError, match=r"unsupported extension '\.glb'"):
+        write_mesh(tmp_path / "m.glb", OCTA_V, OCTA_F)

@@ -4,7 +4,8 @@ With the aligned embeddings, :math:`Z_{ij} = \\lVert X_i - Y_j \\rVert`. The
 first anchor pair is :math:`\\arg\\min Z`; before each further one, ``Z`` is
 lowered by half the geodesic distances to the previous anchors on both
 meshes, :math:`Z_{ij} \\leftarrow Z_{ij} - \\tfrac12[g_1(i, a_l) + g_2(j, b_l)]`,
-so the anchors spread over the shapes. The final map is
+so the anchors spread over the shapes (a vertex already used by an anchor is
+not used again). The final map is
 
 .. math::
 
@@ -72,6 +73,9 @@ def select_anchors(X: np.ndarray, Y: np.ndarray, source_geodesics: RowsFn, targe
             Z = cdist(X[rows], Y)
             Z -= p1[rows, None]
             Z -= p2[None, :]
+            # A pair reusing an earlier anchor vertex adds nothing: exclude it.
+            Z[np.isin(np.arange(rows.start, rows.stop), anchors[:l, 0]), :] = np.inf
+            Z[:, anchors[:l, 1]] = np.inf
             flat = int(np.argmin(Z))
             if Z.flat[flat] < best:
                 best = float(Z.flat[flat])

@@ -17,48 +17,17 @@ spectral domain", Shape Modeling International 2006.
 
 from __future__ import annotations
 
-import time
-from contextlib import contextmanager
-from typing import Callable
-
 import numpy as np
 
 from ._params import check_choice, check_float, check_int
 from .anchors import anchor_descriptors, proximity_matching, select_anchors
-from .embedding import gaussian_affinity, spectral_embedding
 from .geodesics import GEODESIC_METHODS
 from .icp import tps_icp
 from .mesh import Mesh, MeshLike, as_mesh
 from .reorder import REORDER_MODES, rank_configurations
 from .result import Correspondence
-
-#: ``progress(stage, done, total)``: called as long stages advance.
-StageProgress = Callable[[str, int, int], None]
-
-
-class _StageTimer:
-    """Times named stages and forwards progress to an optional callback."""
-
-    def __init__(self, progress: StageProgress | None) -> None:
-        self.progress = progress
-        self.timings: dict[str, float] = {}
-
-    @contextmanager
-    def stage(self, name: str):
-        if self.progress is not None:
-            self.progress(name, 0, 1)
-        start = time.perf_counter()
-        yield
-        self.timings[name] = self.timings.get(name, 0.0) + time.perf_counter() - start
-        if self.progress is not None:
-            self.progress(name, 1, 1)
-
-    def reporter(self, name: str):
-        """A ``(done, total)`` callback for the current stage, or None."""
-        if self.progress is None:
-            return None
-        return lambda done, total: self.progress(name, done, total)
-
+from .spectrum import dense_spectrum
+from .timing import StageProgress, StageTimer
 
 def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "heat",
           scale_eigenvalues: bool = True, reorder: str = "exhaustive", icp_iterations: int = 10,
@@ -111,7 +80,7 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
     check_choice("reorder", reorder, REORDER_MODES)
     n_anchors = check_int("n_anchors", n_anchors, minimum=0)
     anchor_weight = check_float("anchor_weight", anchor_weight, minimum=0.0)
-    timer = _StageTimer(progress)
+    timer = StageTimer(progress)
 
     with timer.stage("load"):
         why = f"The spectral embedding with k={k} needs at least {k + 2} vertices."
@@ -120,17 +89,10 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
         tgt = as_mesh(target, name="target", largest_component=largest_component,
                       min_vertices=k + 2, reason=why)
 
-    # Step 1: all-pairs geodesic distances.
-    with timer.stage("geodesics"):
-        D1 = src.geodesic_matrix(geodesic, progress=timer.reporter("geodesics"))
-        D2 = tgt.geodesic_matrix(geodesic, progress=timer.reporter("geodesics"))
-
-    # Steps 2-3: Gaussian affinities and the scaled spectral embedding.
-    with timer.stage("embedding"):
-        values1, X = spectral_embedding(gaussian_affinity(D1), k, scale=scale_eigenvalues,
-                                        random_state=random_state)
-        values2, Y = spectral_embedding(gaussian_affinity(D2), k, scale=scale_eigenvalues,
-                                        random_state=random_state)
+    # Steps 1-3: geodesic distances, Gaussian affinities, scaled spectral embedding.
+    spectra = [dense_spectrum(mesh, k=k, geodesic=geodesic, scale=scale_eigenvalues,
+                              random_state=random_state, timer=timer) for mesh in (src, tgt)]
+    X, Y = spectra[0].embedding, spectra[1].embedding
 
     # Step 4: eigenvector reordering and sign correction.
     with timer.stage("reorder"):
@@ -145,8 +107,7 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
     # Steps 6-7: anchors, proximity-aided (optionally bijective) matching.
     # Geodesics are divided by each mesh's largest one so both are on one scale.
     with timer.stage("matching"):
-        g1 = lambda i: D1[i] / D1.max()  # noqa: E731
-        g2 = lambda j: D2[j] / D2.max()  # noqa: E731
+        g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
         anchors = select_anchors(X, icp.warped, g1, g2, n_anchors)
         weights = np.full(n_anchors, anchor_weight)
         F1 = anchor_descriptors(anchors[:, 0], g1, weights)
@@ -164,7 +125,7 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
     return Correspondence(
         map=full_map, cost=full_cost, source_vertices=src.kept.copy(), target_vertices=tgt.kept.copy(),
         source_embedding=X, target_embedding=Y_configured, aligned_target_embedding=icp.warped,
-        eigenvalues={"source": values1, "target": values2}, configuration=configurations[0],
+        eigenvalues={"source": spectra[0].eigenvalues, "target": spectra[1].eigenvalues}, configuration=configurations[0],
         alternatives=configurations,
         anchors=np.stack([src.kept[anchors[:, 0]], tgt.kept[anchors[:, 1]]], axis=1),
         icp_history=icp.history, icp_converged=icp.converged, timings=timer.timings, params=params,

@@ -19,8 +19,11 @@ class Correspondence:
         ``map[i]`` is the target vertex matched to source vertex i, in the
         vertex numbering of the input files. -1 for source vertices that
         were not mapped (dropped by ``largest_component=True``).
-    cost : (n_source,) float
+    cost : (n_source,) float or None
         Final matching cost of each pair (NaN where unmapped).
+    method : str
+        The method that produced the map ("spectral" or a baseline's name).
+        Attributes below that a method does not produce are None or empty.
     source_vertices : (n1,) int
         Input indices of the source vertices that were mapped.
     target_vertices : (n2,) int
@@ -51,16 +54,17 @@ class Correspondence:
     """
 
     map: np.ndarray
-    cost: np.ndarray
-    source_vertices: np.ndarray
-    target_vertices: np.ndarray
-    source_embedding: np.ndarray
-    target_embedding: np.ndarray
-    aligned_target_embedding: np.ndarray
-    eigenvalues: dict
-    configuration: Configuration
-    alternatives: list[Configuration]
-    anchors: np.ndarray
+    cost: np.ndarray | None = None
+    method: str = "spectral"
+    source_vertices: np.ndarray | None = None
+    target_vertices: np.ndarray | None = None
+    source_embedding: np.ndarray | None = None
+    target_embedding: np.ndarray | None = None
+    aligned_target_embedding: np.ndarray | None = None
+    eigenvalues: dict = field(default_factory=dict)
+    configuration: Configuration | None = None
+    alternatives: list[Configuration] = field(default_factory=list)
+    anchors: np.ndarray | None = None
     icp_history: list = field(default_factory=list)
     icp_converged: bool = False
     timings: dict = field(default_factory=dict)
@@ -74,16 +78,18 @@ class Correspondence:
     def summary(self) -> dict:
         """A JSON-serialisable summary (no per-vertex arrays)."""
         mapped = self.map >= 0
+        has_cost = self.cost is not None and bool(np.isfinite(self.cost).any())
         return {
+            "method": self.method,
             "n_source": int(len(self.map)),
             "n_mapped": int(mapped.sum()),
             "n_target_hit": int(len(np.unique(self.map[mapped]))),
-            "configuration": self.configuration.to_dict(),
+            "configuration": self.configuration.to_dict() if self.configuration else None,
             "runner_up": self.runner_up.to_dict() if self.runner_up else None,
             "n_configurations": len(self.alternatives),
             "eigenvalues": {k: [float(x) for x in v] for k, v in self.eigenvalues.items()},
-            "anchors": self.anchors.tolist(),
-            "mean_cost": float(np.nanmean(self.cost)) if mapped.any() else None,
+            "anchors": self.anchors.tolist() if self.anchors is not None else None,
+            "mean_cost": float(np.nanmean(self.cost)) if has_cost else None,
             "icp": {"iterations": len(self.icp_history), "converged": self.icp_converged,
                     "history": self.icp_history},
             "timings": {k: round(v, 4) for k, v in self.timings.items()},

@@ -1,0 +1,62 @@
+"""Anchor selection, proximity-aided matching and the bijective option."""
+
+import numpy as np
+import pytest
+
+from meshcorr.anchors import anchor_descriptors, proximity_matching, select_anchors
+from meshcorr.errors import ParameterError
+
+
+def line(n):
+    """Points on a segment; 'geodesic' distance = |x_i - x_j| / length."""
+    x = np.linspace(0.0, 1.0, n)
+    return x[:, None], lambda i: np.abs(x - x[i])
+
+
+def test_first_anchor_is_the_best_pair_and_later_ones_spread():
+    X, g = line(50)
+    Y = X.copy()
+    anchors = select_anchors(X, Y, g, g, 3)
+    np.testing.assert_array_equal(anchors[:, 0], anchors[:, 1])  # identical shapes: a_l == b_l
+    assert len(set(anchors[:, 0])) == 3
+    # Each new anchor is pushed away from the earlier ones: both ends get one.
+    assert {0, 49} <= set(anchors[:, 0].tolist())
+
+
+def test_proximity_matching_on_identical_shapes_is_the_identity():
+    X, g = line(40)
+    F = anchor_descriptors(np.array([0, 20, 39]), g, np.ones(3))
+    mapping, cost = proximity_matching(X, X, F, F)
+    np.testing.assert_array_equal(mapping, np.arange(40))
+    np.testing.assert_allclose(cost, 0.0, atol=1e-12)
+
+
+def test_anchor_term_breaks_a_tie_in_the_embedding():
+    # The embedding cannot tell the two ends apart (|x|), the anchor term can.
+    x = np.linspace(-1.0, 1.0, 21)
+    X = np.abs(x)[:, None]
+    g = lambda i: np.abs(x - x[i]) / 2.0  # noqa: E731
+    F = anchor_descriptors(np.array([0]), g, np.ones(1))
+    plain, _ = proximity_matching(X, X, np.zeros((21, 0)), np.zeros((21, 0)))
+    aided, _ = proximity_matching(X, X, F, F)
+    assert np.mean(plain == np.arange(21)) < 1.0
+    np.testing.assert_array_equal(aided, np.arange(21))
+
+
+def test_bijective_map_is_a_permutation_with_lower_total_cost_than_any_other():
+    rng = np.random.default_rng(0)
+    X = rng.normal(size=(30, 2))
+    Y = X[rng.permutation(30)] + 0.3 * rng.normal(size=(30, 2))
+    empty = np.zeros((30, 0))
+    mapping, cost = proximity_matching(X, Y, empty, empty, bijective=True)
+    assert sorted(mapping.tolist()) == list(range(30))
+    greedy, _ = proximity_matching(X, Y, empty, empty)
+    assert len(set(greedy.tolist())) < 30  # the argmin map is not one-to-one here
+    other = rng.permutation(30)
+    assert cost.sum() <= np.linalg.norm(X - Y[other], axis=1).sum()
+
+
+def test_bijective_needs_equal_vertex_counts():
+    X, Y = np.zeros((5, 2)), np.zeros((6, 2))
+    with pytest.raises(ParameterError, match="same number of vertices; the source has 5 and the target 6"):
+        proximity_matching(X, Y, np.zeros((5, 0)), np.zeros((6, 0)), bijective=True)

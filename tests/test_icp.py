@@ -1,0 +1,68 @@
+"""Thin-plate splines and TPS-ICP in the spectral domain."""
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+from meshcorr.errors import ParameterError
+from meshcorr.icp import tps_icp
+from meshcorr.tps import fit_tps, mean_pairwise_distance
+
+
+def test_tps_interpolates_without_smoothing():
+    rng = np.random.default_rng(0)
+    src = rng.normal(size=(40, 5))
+    dst = src + 0.1 * np.sin(src)
+    f = fit_tps(src, dst, smoothing=0.0)
+    np.testing.assert_allclose(f(src), dst, atol=1e-8)
+
+
+def test_tps_is_affine_under_heavy_smoothing():
+    rng = np.random.default_rng(1)
+    src = rng.normal(size=(60, 3))
+    A = np.array([[1.2, 0.1, 0.0], [0.0, 0.9, 0.2], [0.1, 0.0, 1.1]])
+    dst = src @ A + np.array([0.5, -0.2, 0.3]) + 0.05 * rng.normal(size=src.shape)
+    f = fit_tps(src, dst, smoothing=1e9)
+    query = rng.normal(size=(10, 3))
+    coef, *_ = np.linalg.lstsq(np.c_[np.ones(60), src], dst, rcond=None)
+    np.testing.assert_allclose(f(query), np.c_[np.ones(10), query] @ coef, atol=1e-4)
+
+
+def test_mean_pairwise_distance_known_answer():
+    points = np.array([[0.0, 0.0], [3.0, 4.0], [0.0, 4.0]])
+    assert mean_pairwise_distance(points) == pytest.approx((5 + 4 + 3) / 3)
+
+
+def test_icp_undoes_a_smooth_warp():
+    rng = np.random.default_rng(2)
+    t = rng.uniform(0, 2 * np.pi, size=800)
+    X = np.c_[np.cos(t), np.sin(t), 0.3 * np.cos(2 * t), 0.1 * np.sin(3 * t)] * [1.0, 0.6, 1.0, 1.0]
+    Y = X * [1.1, 0.9, 1.0, 1.0] + 0.05 * X[:, [1, 0, 3, 2]] ** 2  # stretched copy, same order
+    before = cKDTree(Y).query(X)[0].mean()
+    result = tps_icp(X, Y, max_iter=10, random_state=0)
+    after = cKDTree(result.warped).query(X)[0].mean()
+    assert after < 0.25 * before
+    # The warp also moves each point towards its own partner.
+    assert np.linalg.norm(X - result.warped, axis=1).mean() < 0.6 * np.linalg.norm(X - Y, axis=1).mean()
+    assert result.converged and len(result.history) <= 10
+    costs = [h["cost"] for h in result.history]
+    assert costs[-1] < costs[0]
+    assert all(0.0 <= h["changed"] <= 1.0 for h in result.history)
+
+
+def test_zero_iterations_leave_the_target_unchanged():
+    X = np.random.default_rng(3).normal(size=(50, 3))
+    result = tps_icp(X, X + 1.0, max_iter=0)
+    np.testing.assert_array_equal(result.warped, X + 1.0)
+    assert result.history == []
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"max_iter": -1}, "'icp_iterations' parameter must be an int >= 0"),
+    ({"anneal": 0.0}, "'anneal' parameter must be a number > 0"),
+    ({"anneal": 1.5}, "'anneal' parameter must be a number <= 1"),
+])
+def test_bad_parameters_are_rejected(kwargs, message):
+    X = np.zeros((20, 3))
+    with pytest.raises(ParameterError, match=message):
+        tps_icp(X, X, **kwargs)

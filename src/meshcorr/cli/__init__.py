@@ -13,10 +13,12 @@ import warnings
 
 from .. import __version__
 from ..errors import MeshcorrError
+from . import bench as _bench
+from . import evaluate as _evaluate
 from . import match as _match
 
 #: Sub-command modules, in the order ``--help`` lists them.
-COMMANDS = [_match]
+COMMANDS = [_match, _evaluate, _bench]
 
 EXIT_USAGE = 2
 EXIT_ERROR = 1

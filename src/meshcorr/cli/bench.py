@@ -1,0 +1,135 @@
+"""``meshcorr bench``: run and score methods over a dataset of shape pairs."""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import sys
+import time
+from pathlib import Path
+
+from ..geodesics import GEODESIC_METHODS
+
+HELP = "benchmark methods on a dataset of pairs with ground truth (resumable)"
+
+DESCRIPTION = """\
+Map every pair of DATASET_DIR/test_pairs.txt (or a class-stratified sample of
+--pairs of them) with each method, score it against the ground truth
+(corres/NAME.vts, 1-based; corres/NAME.sym.vts for flips) with the geodesic
+error divided by sqrt(target area), and write into --out:
+  results.csv   one row per pair and method (rewritten after each one)
+  summary.md    per-method table: mean error, % under 0.05/0.1/0.25, flip
+                rate, seconds per pair; and the mean error per class
+  summary.csv   the same table
+  curves.png    cumulative error curves (needs meshcorr[plot])
+A restarted run with the same --out skips the pairs already done; a method
+that fails on a pair is recorded as 'failed' and the run goes on.
+"""
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("bench", help=HELP, description=DESCRIPTION,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("dataset", metavar="DATASET_DIR",
+                   help="folder with NAME.off, corres/NAME.vts and test_pairs.txt (TOSCA layout)")
+    p.add_argument("--methods", default="spectral",
+                   help="comma-separated methods: spectral, shapiro-brady, shapiro-brady-scaled, "
+                        "tps-rpm, icp, shape-context (default: spectral)")
+    p.add_argument("--pairs", type=int, default=None, metavar="N",
+                   help="a deterministic, class-stratified sample of N pairs (default: all)")
+    p.add_argument("--out", default="bench-out", metavar="DIR", help="output folder (default: bench-out)")
+    g = p.add_argument_group("method options")
+    g.add_argument("-k", type=int, default=None,
+                   help="eigenpairs, for spectral and shapiro-brady[-scaled] (default: each method's)")
+    g.add_argument("--geodesic", choices=GEODESIC_METHODS, default=None,
+                   help="geodesic solver of the spectral methods (default: each method's)")
+    g.add_argument("--set", action="append", default=[], metavar="METHOD:KEY=VALUE",
+                   help="any option of one method, e.g. --set spectral:reorder=greedy (repeatable)")
+    p.add_argument("--eval-geodesic", choices=GEODESIC_METHODS, default="heat",
+                   help="geodesic solver of the evaluation (default: heat)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the sample and of every method (default: 0)")
+    p.add_argument("--retry-failed", action="store_true", help="run failed (pair, method) rows again")
+    p.add_argument("--no-plot", action="store_true", help="do not draw curves.png")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    p.set_defaults(run=run)
+
+
+def _value(text: str):
+    try:
+        return ast.literal_eval(text)
+    except (ValueError, SyntaxError):
+        return text
+
+
+def method_options(methods: list[str], k, geodesic, settings: list[str]) -> dict[str, dict]:
+    """``{method: {option: value}}`` from -k, --geodesic and --set METHOD:KEY=VALUE."""
+    from ..benchmark import SPECTRAL_FAMILY
+    from ..errors import ParameterError
+
+    options: dict[str, dict] = {m: {} for m in methods}
+    for method in methods:
+        if method in SPECTRAL_FAMILY:
+            if k is not None:
+                options[method]["k"] = k
+            if geodesic is not None:
+                options[method]["geodesic"] = geodesic
+    for item in settings:
+        method, sep, rest = item.partition(":")
+        key, eq, value = rest.partition("=")
+        if not sep or not eq or not key:
+            raise ParameterError(f"--set takes METHOD:KEY=VALUE, e.g. spectral:reorder=greedy; got {item!r}.")
+        if method not in options:
+            raise ParameterError(f"--set {item!r} names method {method!r}, which is not in --methods.")
+        options[method][key] = _value(value)
+    return {m: o for m, o in options.items() if o}
+
+
+class PairProgress:
+    """Progress over (pair, method) tasks on stderr: a bar on a terminal, lines otherwise."""
+
+    def __init__(self, stream=None) -> None:
+        self.stream = stream if stream is not None else sys.stderr
+        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
+        self.start = time.perf_counter()
+
+    def __call__(self, done: int, total: int, message: str) -> None:
+        width = 24
+        filled = int(width * done / max(total, 1))
+        bar = "#" * filled + "-" * (width - filled)
+        elapsed = time.perf_counter() - self.start
+        text = f"[bench] [{bar}] {done}/{total} {elapsed:.0f} s  {message}"
+        finished = not message.endswith("running")
+        if self.tty:
+            self.stream.write("\r\033[K" + text + ("\n" if finished else ""))
+        elif finished:
+            self.stream.write(text + "\n")
+        self.stream.flush()
+
+
+def run(args) -> int:
+    from ..benchmark import check_methods, run_benchmark, summarize, write_summary
+
+    methods = check_methods([m.strip() for m in args.methods.split(",") if m.strip()])
+    options = method_options(methods, args.k, args.geodesic, args.set)
+    if not args.no_plot:
+        from ..plots import require_matplotlib
+
+        require_matplotlib()
+    rows = run_benchmark(args.dataset, methods, args.out, n_pairs=args.pairs, method_options=options,
+                         geodesic=args.eval_geodesic, random_state=args.seed,
+                         retry_failed=args.retry_failed,
+                         progress=None if args.quiet else PairProgress(sys.stderr))
+    table, curves = summarize(rows, args.out)
+    md, _ = write_summary(table, args.out, title=f"meshcorr bench {args.dataset}")
+    if curves and not args.no_plot:
+        from ..plots import plot_cumulative_curves
+
+        styles = {label: "--" if label.endswith("(flips forgiven)") else "-" for label in curves}
+        plot_cumulative_curves(Path(args.out) / "curves.png", curves, styles=styles,
+                               title=f"{len({(r['source'], r['target']) for r in rows})} pairs")
+    sys.stdout.write(md.read_text())
+    failed = sum(e["failed"] for e in table)
+    if failed and not args.quiet:
+        print(f"meshcorr: {failed} (pair, method) runs failed; see the 'error' column of "
+              f"{Path(args.out) / 'results.csv'}", file=sys.stderr)
+    return 0

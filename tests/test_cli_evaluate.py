@@ -1,0 +1,167 @@
+"""``meshcorr evaluate`` and ``meshcorr bench``: outputs, resume, failures, exit codes."""
+
+import csv
+import json
+
+import numpy as np
+import pytest
+import trimesh
+
+import meshcorr.benchmark as benchmark
+from meshcorr import datasets as ds
+from meshcorr.cli import main
+from meshcorr.errors import ParameterError
+from meshcorr.result import Correspondence
+
+
+def save_off(path, shape):
+    trimesh.Trimesh(shape.vertices, shape.faces, process=False).export(path)
+    return str(path)
+
+
+@pytest.fixture(scope="module")
+def pair(tmp_path_factory):
+    """A tube and a rigid, re-indexed copy; truth[i] = copy's vertex of vertex i."""
+    folder = tmp_path_factory.mktemp("eval")
+    shape = ds.tube(n_along=16, n_around=8)
+    copy, truth = ds.rigid_copy(shape, scale=0.5, random_state=3)
+    src, tgt = save_off(folder / "a.off", shape), save_off(folder / "b.off", copy)
+    np.savetxt(folder / "truth.txt", truth, fmt="%d")
+    (folder / "a.vts").write_text("".join(f"{i + 1}\n" for i in range(len(truth))))
+    (folder / "b.vts").write_text("".join(f"{t + 1}\n" for t in truth))
+    shifted = truth[(np.arange(len(truth)) + 8) % len(truth)]  # a wrong map: next ring's vertex
+    np.savetxt(folder / "shifted.txt", shifted, fmt="%d")
+    (folder / "b.sym.vts").write_text("".join(f"{t + 1}\n" for t in shifted))
+    np.savetxt(folder / "short.txt", truth[:127], fmt="%d")
+    return folder, src, tgt
+
+
+def test_evaluate_perfect_map_text(pair, capsys):
+    folder, src, tgt = pair
+    assert main(["evaluate", src, tgt, str(folder / "truth.txt"), "--gt", str(folder / "truth.txt")]) == 0
+    out = capsys.readouterr().out
+    assert "mean geodesic error:   0.0000" in out and "100.0 % / 100.0 % / 100.0 %" in out
+
+
+def test_evaluate_json_with_vts_and_sym(pair, capsys):
+    folder, src, tgt = pair
+    code = main(["evaluate", src, tgt, str(folder / "shifted.txt"), "--gt", str(folder / "a.vts"),
+                 str(folder / "b.vts"), "--sym", str(folder / "b.sym.vts"), "--json",
+                 "--thresholds", "0.5,1"])
+    assert code == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["flipped"] is True and report["sym_mean_error"] == 0.0
+    assert report["mean_error"] > 0.01 and set(report["under"]) == {"0.5", "1"}
+    assert report["under"]["0.5"] <= report["under"]["1"] <= 1.0
+    assert report["n_points"] == ds.tube(n_along=16, n_around=8).n_vertices and report["total_error"] > 0
+
+
+def test_evaluate_curve_png(pair, tmp_path):
+    pytest.importorskip("matplotlib")
+    folder, src, tgt = pair
+    png = tmp_path / "curve.png"
+    assert main(["evaluate", src, tgt, str(folder / "shifted.txt"), "--gt", str(folder / "truth.txt"),
+                 "--curve", str(png)]) == 0
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size < 150_000
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda f: [str(f / "missing.txt"), "--gt", "identity"], "No such file"),
+    (lambda f: [str(f / "short.txt"), "--gt", str(f / "truth.txt")], "has 127 entries"),
+    (lambda f: [str(f / "truth.txt"), "--gt", str(f / "a.vts")], "indexes one mesh only"),
+    (lambda f: [str(f / "truth.txt"), "--gt", str(f / "a.vts"), str(f / "nope.vts")], "No such ground-truth"),
+    (lambda f: [str(f / "truth.txt"), "--gt", "identity", "--thresholds", "x"], "--thresholds"),
+])
+def test_evaluate_errors_exit_2_with_one_line(pair, capsys, change, message):
+    folder, src, tgt = pair
+    assert main(["evaluate", src, tgt, *change(folder)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("meshcorr: error:") and message in err and err.count("\n") == 1
+
+
+# ---------------------------------------------------------------- bench
+
+
+@pytest.fixture()
+def dataset(tmp_path):
+    """Two classes, each a tube and a rigid, re-indexed copy, in the TOSCA layout."""
+    root = tmp_path / "data"
+    (root / "corres").mkdir(parents=True)
+    for cls, shape in (("tube", ds.tube(n_along=22, n_around=10)),
+                       ("fig", ds.tube(n_along=20, n_around=10, random_state=1))):
+        copy, truth = ds.rigid_copy(shape, scale=0.5, random_state=2)
+        for name, mesh, vts in ((f"{cls}0", shape, np.arange(shape.n_vertices)), (f"{cls}1", copy, truth)):
+            save_off(root / f"{name}.off", mesh)
+            (root / "corres" / f"{name}.vts").write_text("".join(f"{i + 1}\n" for i in vts))
+    (root / "test_pairs.txt").write_text("tube0 tube1\nfig0\tfig1\ntube1 tube0\n")
+    return root
+
+
+def fake_method(calls, fail_on=()):
+    def run(name, source, target, *, random_state=0, progress=None, **options):
+        calls.append((source.name, target.name, name, options))
+        if source.name in fail_on:
+            raise RuntimeError("boom\nsecond line")
+        return Correspondence(map=np.arange(source.n_vertices), method=name)
+    return run
+
+
+def test_bench_writes_tables_and_resumes(dataset, tmp_path, monkeypatch, capsys):
+    calls = []
+    monkeypatch.setattr(benchmark, "run_method", fake_method(calls, fail_on={"fig0"}))
+    out = tmp_path / "out"
+    args = ["bench", str(dataset), "--out", str(out), "--no-plot", "-k", "5", "--set", "spectral:reorder='greedy'"]
+    assert main(args) == 0
+    captured = capsys.readouterr()
+    assert "| spectral | 2 | 1 |" in captured.out and "warning" not in captured.err and "1 (pair, method) runs failed" in captured.err
+    rows = list(csv.DictReader((out / "results.csv").open()))
+    assert [(r["source"], r["status"]) for r in rows] == [("tube0", "ok"), ("fig0", "failed"), ("tube1", "ok")]
+    assert rows[1]["error"] == "RuntimeError: boom second line"
+    assert calls[0][3] == {"k": 5, "reorder": "greedy"}
+    assert (out / "maps" / "spectral" / "tube0-tube1.npy").is_file()
+    assert (out / "summary.csv").is_file() and "tube" in (out / "summary.md").read_text()
+
+    before = (out / "results.csv").read_text()
+    calls.clear()
+    assert main(args) == 0  # restart: nothing recomputed, rows unchanged
+    assert calls == [] and (out / "results.csv").read_text() == before
+    assert main(args + ["--retry-failed"]) == 0
+    assert [c[0] for c in calls] == ["fig0"]
+    assert main(["bench", str(dataset), "--out", str(out), "--no-plot", "-q"]) == 2  # other settings
+    assert "other settings" in capsys.readouterr().err
+
+
+def test_bench_real_spectral_run_and_curves(dataset, tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    out = tmp_path / "real"
+    assert main(["bench", str(dataset), "--out", str(out), "--pairs", "2", "-q",
+                 "--set", "spectral:reorder='greedy'", "--set", "spectral:icp_iterations=2"]) == 0
+    rows = list(csv.DictReader((out / "results.csv").open()))
+    assert {r["class"] for r in rows} == {"tube", "fig"} and all(r["status"] == "ok" for r in rows)
+    assert all(float(r["mean_error"]) == 0.0 and float(r["seconds"]) > 0 for r in rows)
+    png = out / "curves.png"
+    assert png.read_bytes()[:4] == b"\x89PNG" and png.stat().st_size < 150_000
+
+
+def test_stratified_sample_covers_classes():
+    pairs = [(f"{c}{i}", f"{c}{i + 1}") for c in "abcd" for i in range(5)]
+    sample = benchmark.stratified_sample(pairs, 8, random_state=0)
+    assert len(sample) == 8 and sorted({benchmark.shape_class(s) for s, _ in sample}) == list("abcd")
+    assert sample == benchmark.stratified_sample(pairs, 8, random_state=0)
+    assert benchmark.stratified_sample(pairs, None) == pairs
+    assert benchmark.shape_class("david10") == "david"
+
+
+def test_bench_input_errors(dataset, tmp_path, capsys):
+    assert main(["bench", str(tmp_path / "nowhere"), "--no-plot"]) == 2
+    assert "No such dataset folder" in capsys.readouterr().err
+    (dataset / "corres" / "fig1.vts").unlink()
+    assert main(["bench", str(dataset), "--out", str(tmp_path / "o"), "--no-plot"]) == 2
+    assert "fig1.vts is missing" in capsys.readouterr().err
+    assert main(["bench", str(dataset), "--methods", "magic", "--no-plot"]) == 2
+    assert "Unknown method 'magic'" in capsys.readouterr().err
+    assert main(["bench", str(dataset), "--set", "spectral-k", "--no-plot"]) == 2
+    assert "METHOD:KEY=VALUE" in capsys.readouterr().err
+    (dataset / "test_pairs.txt").write_text("tube0 tube1 extra\n")
+    with pytest.raises(ParameterError, match="line 1: expected two shape names"):
+        benchmark.load_dataset(dataset)

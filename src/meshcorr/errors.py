@@ -22,3 +22,7 @@ class ParameterError(MeshcorrError, ValueError):
 
 class MeshWarning(UserWarning):
     """A mesh was changed on input (e.g. polygons triangulated) or is suspicious."""
+
+
+class MemoryLimitError(ParameterError):
+    """The chosen mode would need more memory than it is allowed (see ``max_memory``)."""

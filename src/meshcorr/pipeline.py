@@ -24,16 +24,17 @@ from .anchors import anchor_descriptors, proximity_matching, select_anchors
 from .geodesics import GEODESIC_METHODS
 from .icp import tps_icp
 from .mesh import Mesh, MeshLike, as_mesh
+from .modes import MODES, N_LANDMARKS, SCALABLE_ABOVE, build_spectrum, resolve_memory, select_mode
 from .reorder import REORDER_MODES, rank_configurations
 from .result import Correspondence
-from .spectrum import dense_spectrum
 from .timing import StageProgress, StageTimer
 
 def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "heat",
           scale_eigenvalues: bool = True, reorder: str = "exhaustive", icp_iterations: int = 10,
           n_control: int = 500, anneal: float = 0.5, n_anchors: int = 3, anchor_weight: float = 1.0,
           bijective: bool = False, largest_component: bool = False, random_state: int | None = 0,
-          progress: StageProgress | None = None) -> Correspondence:
+          progress: StageProgress | None = None, mode: str = "auto", n_landmarks: int = N_LANDMARKS,
+          max_memory: int | str | None = None, scalable_above: int = SCALABLE_ABOVE) -> Correspondence:
     """Dense vertex correspondence from ``source`` to ``target``.
 
     Parameters
@@ -69,6 +70,19 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
         Seed for everything random (eigensolver start, samples).
     progress : callable, optional
         ``progress(stage, done, total)``.
+    mode : {"auto", "dense", "scalable"}
+        "dense": all-pairs geodesics and the exact eigenpairs (``O(n^2)``
+        memory, the reference); "scalable": landmark geodesics and the
+        Nyström extension (``O(n m)``); "auto": dense up to
+        ``scalable_above`` vertices if it fits in ``max_memory``, else
+        scalable (see :mod:`meshcorr.modes`).
+    n_landmarks : int
+        m, landmark vertices of the scalable mode.
+    max_memory : int or str, optional
+        Bytes (or a size such as ``"4GiB"``) the dense mode may use; it
+        refuses larger inputs. Default: 80 % of the memory available now.
+    scalable_above : int
+        Vertex count above which "auto" picks the scalable mode.
 
     Returns
     -------
@@ -80,6 +94,9 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
     check_choice("reorder", reorder, REORDER_MODES)
     n_anchors = check_int("n_anchors", n_anchors, minimum=0)
     anchor_weight = check_float("anchor_weight", anchor_weight, minimum=0.0)
+    check_choice("mode", mode, MODES)
+    n_landmarks = check_int("n_landmarks", n_landmarks, minimum=k + 1)
+    max_memory = resolve_memory(max_memory)
     timer = StageTimer(progress)
 
     with timer.stage("load"):
@@ -90,8 +107,11 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
                       min_vertices=k + 2, reason=why)
 
     # Steps 1-3: geodesic distances, Gaussian affinities, scaled spectral embedding.
-    spectra = [dense_spectrum(mesh, k=k, geodesic=geodesic, scale=scale_eigenvalues,
-                              random_state=random_state, timer=timer) for mesh in (src, tgt)]
+    mode = select_mode(mode, src.n_vertices, tgt.n_vertices, max_memory=max_memory,
+                       scalable_above=scalable_above, bijective=bijective)
+    spectra = [build_spectrum(mesh, mode, k=k, geodesic=geodesic, scale=scale_eigenvalues,
+                              n_landmarks=n_landmarks, random_state=random_state, timer=timer)
+               for mesh in (src, tgt)]
     X, Y = spectra[0].embedding, spectra[1].embedding
 
     # Step 4: eigenvector reordering and sign correction.
@@ -121,7 +141,8 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
     params = dict(k=k, geodesic=geodesic, scale_eigenvalues=scale_eigenvalues, reorder=reorder,
                   icp_iterations=icp_iterations, n_control=n_control, anneal=anneal,
                   n_anchors=n_anchors, anchor_weight=anchor_weight, bijective=bijective,
-                  largest_component=largest_component, random_state=random_state)
+                  largest_component=largest_component, random_state=random_state, mode=mode,
+                  n_landmarks=n_landmarks, max_memory=max_memory)
     return Correspondence(
         map=full_map, cost=full_cost, source_vertices=src.kept.copy(), target_vertices=tgt.kept.copy(),
         source_embedding=X, target_embedding=Y_configured, aligned_target_embedding=icp.warped,

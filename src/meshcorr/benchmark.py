@@ -177,7 +177,7 @@ def check_methods(methods: Sequence[str]) -> list[str]:
             raise ParameterError(f"Unknown method {name!r}; choose from {', '.join(METHODS)}.")
     if any(name != "spectral" for name in methods):
         try:
-            from . import baselines  # noqa: F401
+            from .baselines import run_method as _  # noqa: F401
         except ImportError as exc:
             raise ParameterError("The baselines (meshcorr.baselines) are not available in this "
                                  "installation; run with --methods spectral.") from exc

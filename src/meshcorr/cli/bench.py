@@ -66,13 +66,16 @@ def method_options(methods: list[str], k, geodesic, settings: list[str]) -> dict
     from ..benchmark import SPECTRAL_FAMILY
     from ..errors import ParameterError
 
+    try:  # the baselines say which options each method takes
+        from ..baselines import method_options as takes
+    except ImportError:
+        def takes(method):
+            return ("k", "geodesic") if method in SPECTRAL_FAMILY else ()
     options: dict[str, dict] = {m: {} for m in methods}
     for method in methods:
-        if method in SPECTRAL_FAMILY:
-            if k is not None:
-                options[method]["k"] = k
-            if geodesic is not None:
-                options[method]["geodesic"] = geodesic
+        for key, value in (("k", k), ("geodesic", geodesic)):
+            if value is not None and key in takes(method):
+                options[method][key] = value
     for item in settings:
         method, sep, rest = item.partition(":")
         key, eq, value = rest.partition("=")

@@ -17,24 +17,40 @@ spectral domain", Shape Modeling International 2006.
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from ._params import check_choice, check_float, check_int
 from .anchors import anchor_descriptors, proximity_matching, select_anchors
+from .errors import MeshWarning, ParameterError
 from .geodesics import GEODESIC_METHODS
 from .icp import tps_icp
 from .mesh import Mesh, MeshLike, as_mesh
 from .modes import MODES, N_LANDMARKS, SCALABLE_ABOVE, build_spectrum, resolve_memory, select_mode
-from .reorder import REORDER_MODES, rank_configurations
+from .orientation import mesh_orientation, orientation_score
+from .refine import refine_map
+from .reorder import REORDER_MODES, Configuration, rank_configurations
 from .result import Correspondence
+from .symmetry import SYMMETRY_MODES, Candidate, candidate_ranks, choose, metric_distortion
 from .timing import StageProgress, StageTimer
+from .tps import mean_pairwise_distance
+
+#: Laplace-Beltrami basis size of the ZoomOut refinement (see :mod:`meshcorr.refine`).
+REFINE_K = 40
+#: Geodesic rows sampled on the source for the metric distortion of a candidate.
+N_DISTORTION_SOURCES = 16
+ANCHOR_SCALES = ("embedding", "geodesic")
+
 
 def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "heat",
           scale_eigenvalues: bool = True, reorder: str = "exhaustive", icp_iterations: int = 10,
           n_control: int = 500, anneal: float = 0.5, n_anchors: int = 3, anchor_weight: float = 1.0,
           bijective: bool = False, largest_component: bool = False, random_state: int | None = 0,
           progress: StageProgress | None = None, mode: str = "auto", n_landmarks: int = N_LANDMARKS,
-          max_memory: int | str | None = None, scalable_above: int = SCALABLE_ABOVE) -> Correspondence:
+          max_memory: int | str | None = None, scalable_above: int = SCALABLE_ABOVE,
+          symmetry: str = "auto", refine: bool = True, refine_k: int = REFINE_K,
+          anchor_scale: str = "embedding") -> Correspondence:
     """Dense vertex correspondence from ``source`` to ``target``.
 
     Parameters
@@ -83,6 +99,21 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
         refuses larger inputs. Default: 80 % of the memory available now.
     scalable_above : int
         Vertex count above which "auto" picks the scalable mode.
+    symmetry : {"auto", "cost", "mirror"}
+        How to choose among near-tied eigenvector configurations (the
+        left/right mirror, :mod:`meshcorr.symmetry`): "auto" keeps the least
+        distorted orientation-preserving map; "cost" the cheapest
+        configuration (the paper); "mirror" the alternative "auto" keeps.
+    refine : bool
+        Refine the map by ZoomOut spectral upsampling (:mod:`meshcorr.refine`).
+    refine_k : int
+        Laplace-Beltrami basis size of the refinement.
+    anchor_scale : {"embedding", "geodesic"}
+        "embedding": the anchor term is expressed in the embedding's length
+        scale (its geodesics times mean embedding distance / (h x mean
+        normalised geodesic distance)), so it is commensurate with the
+        embedding term; "geodesic": geodesics divided by the largest one,
+        as in ALGORITHM.md step 6.
 
     Returns
     -------
@@ -97,6 +128,11 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
     check_choice("mode", mode, MODES)
     n_landmarks = check_int("n_landmarks", n_landmarks, minimum=k + 1)
     max_memory = resolve_memory(max_memory)
+    check_choice("symmetry", symmetry, SYMMETRY_MODES)
+    check_choice("anchor_scale", anchor_scale, ANCHOR_SCALES)
+    if not isinstance(refine, (bool, np.bool_)):
+        raise ParameterError(f"The 'refine' parameter must be True or False. Got {refine!r} instead.")
+    refine_k = check_int("refine_k", refine_k, minimum=2)
     timer = StageTimer(progress)
 
     with timer.stage("load"):
@@ -117,37 +153,124 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
     # Step 4: eigenvector reordering and sign correction.
     with timer.stage("reorder"):
         configurations = rank_configurations(X, Y, reorder, random_state=random_state)
-        Y_configured = configurations[0].apply(Y)
 
-    # Step 5: non-rigid alignment, thin-plate-spline ICP in the spectral domain.
-    with timer.stage("icp"):
-        icp = tps_icp(X, Y_configured, max_iter=icp_iterations, n_control=n_control,
-                      anneal=anneal, random_state=random_state)
-
-    # Steps 6-7: anchors, proximity-aided (optionally bijective) matching.
-    # Geodesics are divided by each mesh's largest one so both are on one scale.
+    # Steps 5-7 for each near-tied configuration; the left/right mirror is
+    # resolved by the orientation of each candidate's map (meshcorr.symmetry).
+    options = dict(icp_iterations=icp_iterations, n_control=n_control, anneal=anneal,
+                   n_anchors=n_anchors, anchor_weight=anchor_weight, anchor_scale=anchor_scale,
+                   bijective=bijective, random_state=random_state)
+    with timer.stage("symmetry"):
+        reliable = mesh_orientation(src).reliable and mesh_orientation(tgt).reliable
+    candidates = _score_candidates(src, tgt, spectra, configurations, timer, options)
+    chosen, other = choose(candidates, symmetry, orientation_reliable=reliable)
+    if not reliable and symmetry == "auto" and len(candidates) > 1:
+        why = mesh_orientation(src).reason or mesh_orientation(tgt).reason
+        warnings.warn(f"The left/right orientation cannot be checked: {why}. The map may be the mirror "
+                      "image of the right one; compare it with result.alternative_map.", MeshWarning,
+                      stacklevel=2)
     with timer.stage("matching"):
-        g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
-        anchors = select_anchors(X, icp.warped, g1, g2, n_anchors)
-        weights = np.full(n_anchors, anchor_weight)
-        F1 = anchor_descriptors(anchors[:, 0], g1, weights)
-        F2 = anchor_descriptors(anchors[:, 1], g2, weights)
-        local_map, local_cost = proximity_matching(X, icp.warped, F1, F2, bijective=bijective)
+        for candidate in (chosen, other):
+            if candidate is not None:
+                _finish(candidate, X, Y, spectra, **options)
+    refine_history: list = []
+    if refine:  # the chosen map only: the alternative is kept as proximity matching gave it
+        with timer.stage("refine"):
+            chosen.mapping, refine_history = refine_map(src, tgt, chosen.mapping, k=refine_k,
+                                                        bijective=bijective, random_state=random_state)
+    icp, anchors = chosen.extra["icp"], chosen.extra["anchors"]
+    local_map, local_cost = chosen.mapping, chosen.extra["cost"]
 
     full_map = np.full(src.n_original, -1, dtype=np.int64)
     full_map[src.kept] = tgt.kept[local_map]
     full_cost = np.full(src.n_original, np.nan)
-    full_cost[src.kept] = local_cost
+    if not refine:
+        full_cost[src.kept] = local_cost
+    alternative_map = None
+    if other is not None:
+        alternative_map = np.full(src.n_original, -1, dtype=np.int64)
+        alternative_map[src.kept] = tgt.kept[other.mapping]
+    summaries = [dict(c.to_dict(), chosen=c is chosen, alternative=c is other) for c in candidates]
+    Y_configured = chosen.configuration.apply(Y)
     params = dict(k=k, geodesic=geodesic, scale_eigenvalues=scale_eigenvalues, reorder=reorder,
                   icp_iterations=icp_iterations, n_control=n_control, anneal=anneal,
                   n_anchors=n_anchors, anchor_weight=anchor_weight, bijective=bijective,
                   largest_component=largest_component, random_state=random_state, mode=mode,
-                  n_landmarks=n_landmarks, max_memory=max_memory)
+                  n_landmarks=n_landmarks, max_memory=max_memory, symmetry=symmetry, refine=refine,
+                  refine_k=refine_k, anchor_scale=anchor_scale)
     return Correspondence(
         map=full_map, cost=full_cost, source_vertices=src.kept.copy(), target_vertices=tgt.kept.copy(),
         source_embedding=X, target_embedding=Y_configured, aligned_target_embedding=icp.warped,
-        eigenvalues={"source": spectra[0].eigenvalues, "target": spectra[1].eigenvalues}, configuration=configurations[0],
-        alternatives=configurations,
+        eigenvalues={"source": spectra[0].eigenvalues, "target": spectra[1].eigenvalues}, configuration=chosen.configuration,
+        alternatives=_chosen_first(configurations, chosen, other),
         anchors=np.stack([src.kept[anchors[:, 0]], tgt.kept[anchors[:, 1]]], axis=1),
         icp_history=icp.history, icp_converged=icp.converged, timings=timer.timings, params=params,
+        candidates=summaries, alternative_map=alternative_map, orientation_reliable=reliable,
+        refine_history=refine_history,
     )
+
+
+def _chosen_first(configurations: list[Configuration], chosen: Candidate,
+                  other: Candidate | None) -> list[Configuration]:
+    """The ranked configurations with the chosen one first and the alternative second."""
+    head = [chosen.configuration] + ([other.configuration] if other is not None else [])
+    return head + [c for c in configurations if all(c is not h for h in head)]
+
+
+def _score_candidates(src: Mesh, tgt: Mesh, spectra, configurations: list[Configuration],
+                      timer: StageTimer, options: dict) -> list[Candidate]:
+    """Align each near-tied configuration and score its map (orientation, distortion).
+
+    The score uses each candidate's TPS-ICP nearest-neighbour map: the
+    anchors and the refinement only run for the chosen map and its
+    alternative (:func:`_finish`).
+    """
+    X, Y = spectra[0].embedding, spectra[1].embedding
+    g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
+    rng = np.random.default_rng(options["random_state"])
+    sources = rng.choice(len(X), size=min(N_DISTORTION_SOURCES, len(X)), replace=False)
+    source_rows: dict = {}
+    candidates = []
+    for rank in candidate_ranks(configurations):
+        configuration = configurations[rank]
+        with timer.stage("icp"):
+            icp = _align(X, configuration.apply(Y), **options)
+        with timer.stage("symmetry"):
+            candidates.append(Candidate(
+                rank=rank, configuration=configuration,
+                orientation=orientation_score(src, tgt, icp.matches, random_state=options["random_state"]),
+                distortion=metric_distortion(g1, g2, icp.matches, sources, source_rows),
+                mapping=icp.matches, extra={"icp": icp, "anchors": np.zeros((0, 2), dtype=np.int64),
+                                            "cost": None}))
+    return candidates
+
+
+def _align(X: np.ndarray, Y_configured: np.ndarray, *, icp_iterations: int, n_control: int,
+           anneal: float, random_state, **_):
+    """Step 5: thin-plate-spline ICP of one configured target embedding."""
+    return tps_icp(X, Y_configured, max_iter=icp_iterations, n_control=n_control, anneal=anneal,
+                   random_state=random_state)
+
+
+def _finish(candidate: Candidate, X: np.ndarray, Y: np.ndarray, spectra, *, n_anchors: int,
+            anchor_weight: float, anchor_scale: str, bijective: bool, **_) -> None:
+    """Steps 6-7 for one aligned candidate: anchors, proximity-aided matching.
+
+    With ``anchor_scale="embedding"`` the normalised geodesic term is put in
+    the embedding's length scale: multiplied by the mean distance between
+    embedded points over ``h`` times the mean normalised geodesic distance
+    to the anchors (ALGORITHM.md, "Pitfalls": geodesics in [0, 1] summed over
+    three anchors dwarf embedding distances of ~0.1-0.3).
+    """
+    warped = candidate.extra["icp"].warped
+    g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
+    anchors = select_anchors(X, warped, g1, g2, n_anchors)
+    F1 = anchor_descriptors(anchors[:, 0], g1, np.ones(n_anchors))
+    F2 = anchor_descriptors(anchors[:, 1], g2, np.ones(n_anchors))
+    scale = anchor_weight
+    if anchor_scale == "embedding" and n_anchors > 0:
+        mean_geodesic = 0.5 * (F1.mean() + F2.mean())
+        scale *= mean_pairwise_distance(X) / (n_anchors * max(mean_geodesic, 1e-12))
+    mapping, cost = proximity_matching(X, warped, F1 * scale, F2 * scale, bijective=bijective)
+    candidate.mapping = mapping
+    candidate.extra.update(anchors=anchors, cost=cost)
+

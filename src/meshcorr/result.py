@@ -51,6 +51,20 @@ class Correspondence:
         Seconds per stage.
     params : dict
         The options used.
+    candidates : list of dict
+        The near-tied configurations whose maps were scored to resolve the
+        left/right mirror (:mod:`meshcorr.symmetry`): rank, perm, signs,
+        cost, orientation score, metric distortion, and which one was
+        chosen / kept as the alternative.
+    alternative_map : (n_source,) int or None
+        The map of the alternative candidate (usually the mirror image of
+        ``map``), same numbering and conventions as ``map``; it is not
+        refined.
+    orientation_reliable : bool or None
+        Whether both meshes have a well-defined outside, so orientation
+        scores mean something (see :mod:`meshcorr.orientation`).
+    refine_history : list of dict
+        Per ZoomOut iteration (:mod:`meshcorr.refine`): basis size, fraction changed.
     """
 
     map: np.ndarray
@@ -69,6 +83,10 @@ class Correspondence:
     icp_converged: bool = False
     timings: dict = field(default_factory=dict)
     params: dict = field(default_factory=dict)
+    candidates: list[dict] = field(default_factory=list)
+    alternative_map: np.ndarray | None = None
+    orientation_reliable: bool | None = None
+    refine_history: list = field(default_factory=list)
 
     @property
     def runner_up(self) -> Configuration | None:
@@ -94,4 +112,7 @@ class Correspondence:
                     "history": self.icp_history},
             "timings": {k: round(v, 4) for k, v in self.timings.items()},
             "params": self.params,
+            "candidates": self.candidates,
+            "orientation_reliable": self.orientation_reliable,
+            "refine": {"iterations": len(self.refine_history), "history": self.refine_history},
         }

@@ -1,0 +1,224 @@
+"""Surface orientation: consistent outward winding and the orientation score of a map.
+
+An intrinsic symmetry (left/right of a person or an animal) is an isometry
+that *reverses* orientation, so a map and its mirror image cost the same to
+every intrinsic criterion, the spectral cost included (ALGORITHM.md,
+"Pitfalls"). Orientation tells them apart: with both meshes oriented
+outwards, a correct map takes a small counter-clockwise loop around a
+source vertex to a counter-clockwise loop around its image, a mirrored map
+to a clockwise one.
+
+The score of a vertex map :math:`f` is measured on mapped neighbourhoods.
+For a source vertex :math:`i` with outward normal :math:`n_i` and a
+right-handed tangent frame :math:`(u_i, v_i)`, :math:`u_i \\times v_i = n_i`,
+its ``n_neighbors`` nearest vertices :math:`j` give tangent coordinates
+:math:`a_j = ((x_j - x_i) \\cdot u_i, (x_j - x_i) \\cdot v_i)`; the least
+squares Jacobian of :math:`f` at :math:`i` pushes :math:`u_i, v_i` to
+
+.. math::
+
+    (c_1, c_2) = \\sum_j (y_{f(j)} - y_{f(i)}) \\, a_j^T
+                 \\left(\\sum_j a_j a_j^T\\right)^{-1}
+
+and the map keeps the orientation at :math:`i` when the triple product
+:math:`m_{f(i)} \\cdot (c_1 \\times c_2) > 0`, with :math:`m` the target's
+outward vertex normal (the positive factor :math:`\\det(\\sum a a^T)^{-1}` is
+left out: only the sign counts). The score is the area-weighted fraction of
+sampled source vertices whose sign is positive, among those whose
+neighbourhood does not collapse onto one target vertex: near 1 for an
+orientation-preserving map, near 0 for a mirrored one, near 0.5 for noise.
+Using a neighbourhood rather than single triangles makes the test robust to
+the vertex-level noise of a nearest-neighbour map.
+
+Winding is repaired with ``trimesh.repair.fix_winding`` (a traversal of the
+face adjacency) and turned outwards by the sign of the enclosed volume. For an
+open mesh the enclosed volume depends on the reference point (the holes are
+not closed): the orientation is called *unreliable* when that sign changes
+between the centroid and the corners of the bounding box, e.g. for a
+disc-like patch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ._params import check_int
+from .errors import ParameterError
+from .mesh import Mesh
+
+
+@dataclass(frozen=True)
+class Orientation:
+    """Consistent, outward-facing triangles of a mesh.
+
+    Attributes
+    ----------
+    faces : (m, 3) int
+        The mesh's faces, rows reversed where needed so that every face is
+        counter-clockwise seen from outside.
+    reliable : bool
+        Whether "outside" is well defined (closed mesh, or open with small
+        holes; see the module docstring).
+    reason : str
+        Why not, when ``reliable`` is False; empty otherwise.
+    n_flipped : int
+        Faces whose winding was reversed.
+    """
+
+    faces: np.ndarray
+    reliable: bool
+    reason: str
+    n_flipped: int
+
+
+def _signed_volume(vertices: np.ndarray, faces: np.ndarray, origin: np.ndarray) -> float:
+    """Volume enclosed by the triangles, seen from ``origin`` (divergence theorem)."""
+    v = vertices[faces] - origin
+    return float(np.einsum("ij,ij->i", v[:, 0], np.cross(v[:, 1], v[:, 2])).sum() / 6.0)
+
+
+def orient_outward(vertices: np.ndarray, faces: np.ndarray) -> Orientation:
+    """Repair the winding of a triangle mesh and turn it outwards.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+    faces : (m, 3) int
+        One connected, manifold surface (as :func:`meshcorr.validate.validate_mesh`
+        guarantees).
+
+    Returns
+    -------
+    orientation : Orientation
+    """
+    import trimesh
+
+    tm = trimesh.Trimesh(vertices=np.asarray(vertices, dtype=float), faces=np.array(faces), process=False,
+                         validate=False)
+    trimesh.repair.fix_winding(tm)
+    fixed = np.array(tm.faces, dtype=np.int64)
+    if not tm.is_winding_consistent:
+        return Orientation(fixed, False, "the surface is not orientable (a Moebius-like strip): "
+                           "its triangles cannot all be wound the same way", _n_flipped(faces, fixed))
+    V = np.asarray(vertices, dtype=float)
+    lo, hi = V.min(axis=0), V.max(axis=0)
+    origins = [V.mean(axis=0)] + [np.where(np.array(c, dtype=bool), hi, lo)
+                                  for c in np.ndindex(2, 2, 2)]
+    volumes = np.array([_signed_volume(V, fixed, o) for o in origins])
+    if volumes[0] < 0:
+        fixed = fixed[:, ::-1].copy()
+        volumes = -volumes
+    reliable, reason = True, ""
+    if not (volumes > 0).all():
+        reliable = False
+        reason = ("the mesh is open and its holes are too large to tell its outside from its inside "
+                  "(the enclosed volume changes sign with the reference point)")
+    return Orientation(fixed, reliable, reason, _n_flipped(faces, fixed))
+
+
+def _n_flipped(before: np.ndarray, after: np.ndarray) -> int:
+    """Faces whose cyclic order changed (same vertex sets, row by row)."""
+    b, a = np.asarray(before), np.asarray(after)
+    same = np.zeros(len(b), dtype=bool)
+    for shift in range(3):
+        same |= (np.roll(b, shift, axis=1) == a).all(axis=1)
+    return int((~same).sum())
+
+
+def mesh_orientation(mesh: Mesh) -> Orientation:
+    """:func:`orient_outward` of a :class:`~meshcorr.mesh.Mesh`, cached on it (the mesh is immutable)."""
+    key = ("orientation",)
+    if key not in mesh._cache:
+        mesh._cache[key] = orient_outward(mesh.vertices, mesh.faces)
+    return mesh._cache[key]
+
+
+def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Area-weighted unit vertex normals and lumped vertex areas.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+    faces : (m, 3) int
+        Consistently oriented.
+
+    Returns
+    -------
+    normals : (n, 3) float
+        Sum of the adjacent faces' area vectors, normalised.
+    areas : (n,) float
+        A third of the adjacent faces' areas (barycentric lumped mass).
+    """
+    v = vertices[faces]
+    cross = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])  # 2 * area * unit normal
+    n = len(vertices)
+    normals = np.stack([np.bincount(faces.ravel(), weights=np.repeat(cross[:, c], 3), minlength=n)
+                        for c in range(3)], axis=1)
+    areas = np.bincount(faces.ravel(), weights=np.repeat(np.linalg.norm(cross, axis=1) / 6.0, 3), minlength=n)
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    return normals / np.where(length > 0, length, 1.0), areas
+
+
+def _tangent_frames(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Right-handed unit tangents ``(u, v)`` with ``u x v = normal``."""
+    helper = np.where(np.abs(normals[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    u = np.cross(helper, normals)
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    return u, np.cross(normals, u)
+
+
+def orientation_score(source: Mesh, target: Mesh, mapping: np.ndarray, *, n_neighbors: int = 16,
+                      n_sample: int = 2000, random_state: int | None = 0) -> float:
+    """Fraction of the source on which a vertex map keeps the orientation.
+
+    Parameters
+    ----------
+    source, target : Mesh
+        Orientation is repaired internally (:func:`mesh_orientation`).
+    mapping : (n1,) int
+        ``mapping[i]`` is the target vertex of source vertex i.
+    n_neighbors : int
+        Size of the neighbourhood whose image is tested (>= 2).
+    n_sample : int
+        Source vertices tested (a seeded sample; all if fewer).
+    random_state : int or None
+        Seed of the sample.
+
+    Returns
+    -------
+    score : float in [0, 1]
+        Area-weighted fraction of tested vertices whose mapped neighbourhood
+        keeps its orientation (module docstring); 0.5 when every tested
+        neighbourhood collapses onto a single target vertex.
+    """
+    n_neighbors = check_int("n_neighbors", n_neighbors, minimum=2)
+    n_sample = check_int("n_sample", n_sample, minimum=1)
+    mapping = np.asarray(mapping)
+    if mapping.shape != (source.n_vertices,):
+        raise ParameterError(f"The map must have one entry per source vertex ({source.n_vertices}). "
+                             f"Got shape {mapping.shape} instead.")
+    if mapping.size and (mapping.min() < 0 or mapping.max() >= target.n_vertices):
+        raise ParameterError(f"The map must hold target vertex indices in [0, {target.n_vertices}). "
+                             f"Got values in [{mapping.min()}, {mapping.max()}] instead.")
+    X, Y = source.vertices, target.vertices
+    src_normals, src_areas = vertex_normals(X, mesh_orientation(source).faces)
+    tgt_normals, _ = vertex_normals(Y, mesh_orientation(target).faces)
+    rng = np.random.default_rng(random_state)
+    n1 = len(X)
+    sample = np.arange(n1) if n1 <= n_sample else np.sort(rng.choice(n1, size=n_sample, replace=False))
+    k = min(n_neighbors + 1, n1)
+    _, nbrs = cKDTree(X).query(X[sample], k=k)
+    nbrs = nbrs[:, 1:]  # drop the vertex itself
+    u, v = _tangent_frames(src_normals[sample])
+    dx = X[nbrs] - X[sample, None, :]
+    a = np.stack([np.einsum("skc,sc->sk", dx, u), np.einsum("skc,sc->sk", dx, v)], axis=2)  # (s, K, 2)
+    dy = Y[mapping[nbrs]] - Y[mapping[sample], None, :]  # (s, K, 3)
+    c = np.einsum("skc,skt->sct", dy, a)  # (s, 3, 2): images of u, v up to a positive factor
+    triple = np.einsum("sc,sc->s", tgt_normals[mapping[sample]], np.cross(c[:, :, 0], c[:, :, 1]))
+    w = src_areas[sample] * (triple != 0)
+    if w.sum() == 0:
+        return 0.5
+    return float((w * (triple > 0)).sum() / w.sum())

@@ -1,0 +1,181 @@
+"""Choosing among near-tied eigenvector configurations: resolving the mirror.
+
+On a shape with an intrinsic (left/right) symmetry, the eigenvector sign
+configuration of the true map and that of its mirror image cost nearly the
+same (ALGORITHM.md, "Pitfalls": the lowest-cost configuration was the
+mirror in 7 of 10 TOSCA and Sumner pairs). A low-dimensional embedding also
+confuses the front and the back of thin shapes (a person's chest and
+back), which is not an isometry. Two measures on each candidate's map tell
+these apart:
+
+- the **orientation score** (:func:`meshcorr.orientation.orientation_score`):
+  near 1 for an orientation-preserving map, near 0 for a mirrored one. The
+  left/right mirror reverses orientation; it is invisible to every intrinsic
+  measure.
+- the **metric distortion**, the mean over a few source vertices :math:`i`
+  and all vertices :math:`j` of
+  :math:`|g_1(i, j) - g_2(f(i), f(j))|` with geodesics normalised by each
+  mesh's largest one: 0 for an isometry. It rejects non-isometric
+  confusions (front/back, a wrong eigenvector order) that happen to
+  preserve orientation. This is the Gromov-Hausdorff-type criterion of
+  isometric matching (Bronstein, Bronstein & Kimmel, PNAS 2006).
+
+:func:`choose` takes the least distorted orientation-preserving candidate
+(``"auto"``), the cheapest configuration (``"cost"``, the paper's choice), or
+the alternative of ``"auto"`` (``"mirror"``). The alternative kept in the
+result is the least distorted candidate of the opposite orientation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ._params import check_choice, check_float, check_int
+from .reorder import Configuration
+
+SYMMETRY_MODES = ("auto", "cost", "mirror")
+
+
+@dataclass
+class Candidate:
+    """One near-tied configuration and the scores of its map.
+
+    Attributes
+    ----------
+    rank : int
+        Position of the configuration in the ranked list (0 = cheapest).
+    configuration : Configuration
+    orientation : float
+        Orientation score of the candidate's map, in [0, 1].
+    distortion : float
+        Metric distortion of the candidate's map (normalised geodesics).
+    mapping : (n1,) int
+        The candidate's map (source vertex -> target vertex, local numbering).
+    extra : dict
+        Whatever the pipeline attaches (the alignment it came from).
+    """
+
+    rank: int
+    configuration: Configuration
+    orientation: float
+    distortion: float
+    mapping: np.ndarray
+    extra: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        return {"rank": self.rank, **self.configuration.to_dict(),
+                "orientation": round(float(self.orientation), 4),
+                "distortion": round(float(self.distortion), 5)}
+
+
+def candidate_ranks(configurations: list[Configuration], *, tolerance: float = 0.25,
+                    max_candidates: int = 6) -> list[int]:
+    """Ranks of the configurations near-tied with the cheapest one.
+
+    Parameters
+    ----------
+    configurations : list of Configuration
+        Ranked as :func:`meshcorr.reorder.rank_configurations` returns them.
+    tolerance : float
+        Relative cost margin: configuration r is a candidate when
+        ``cost_r <= (1 + tolerance) * min cost``.
+    max_candidates : int
+        At most this many (the cheapest).
+
+    Returns
+    -------
+    ranks : list of int
+        Always ranks 0 and 1 (the paper's runner-up) when they exist.
+    """
+    tolerance = check_float("symmetry_tolerance", tolerance, minimum=0.0)
+    max_candidates = check_int("max_candidates", max_candidates, minimum=2)
+    if not configurations:
+        return []
+    costs = np.array([c.cost for c in configurations])
+    limit = (1.0 + tolerance) * costs.min()
+    near = [r for r in np.argsort(costs, kind="stable") if costs[r] <= limit]
+    ranks = list(dict.fromkeys([0, 1][:len(configurations)] + [int(r) for r in near]))
+    return ranks[:max(max_candidates, 2)]
+
+
+def metric_distortion(source_geodesics: Callable[[int], np.ndarray],
+                      target_geodesics: Callable[[int], np.ndarray], mapping: np.ndarray,
+                      sources: np.ndarray, source_rows: dict | None = None) -> float:
+    """Mean :math:`|g_1(i, j) - g_2(f(i), f(j))|` over ``i`` in ``sources`` and all ``j``.
+
+    Parameters
+    ----------
+    source_geodesics, target_geodesics : callable
+        ``f(i)`` returns the normalised geodesic distances from vertex i, ``(n,)``.
+    mapping : (n1,) int
+    sources : (m,) int
+        Source vertices used.
+    source_rows : dict, optional
+        Cache of source rows shared between candidates.
+
+    Returns
+    -------
+    distortion : float
+    """
+    rows = {} if source_rows is None else source_rows
+    total = 0.0
+    for i in np.asarray(sources, dtype=np.int64):
+        if int(i) not in rows:
+            rows[int(i)] = np.asarray(source_geodesics(int(i)))
+        total += float(np.abs(rows[int(i)] - np.asarray(target_geodesics(int(mapping[i])))[mapping]).mean())
+    return total / max(1, len(sources))
+
+
+def choose(candidates: list[Candidate], symmetry: str = "auto", *,
+           orientation_reliable: bool = True) -> tuple[Candidate, Candidate | None]:
+    """Pick the map and its alternative among scored candidates.
+
+    Parameters
+    ----------
+    candidates : list of Candidate
+        In rank order (``candidates[0]`` is the cheapest configuration).
+    symmetry : {"auto", "cost", "mirror"}
+        ``"auto"``: the least distorted orientation-preserving candidate
+        (score >= 0.5); if none preserves orientation or the orientation is
+        unreliable, the least distorted one. ``"cost"``: the cheapest
+        configuration. ``"mirror"``: the alternative ``"auto"`` would keep.
+    orientation_reliable : bool
+        False when a mesh's outside is undefined (see
+        :mod:`meshcorr.orientation`): orientation scores are then ignored.
+
+    Returns
+    -------
+    chosen : Candidate
+    alternative : Candidate or None
+        The least distorted candidate of the orientation opposite to the
+        chosen one's (for ``"cost"``: to the cheapest one's); None with a
+        single candidate.
+    """
+    check_choice("symmetry", symmetry, SYMMETRY_MODES)
+    if not candidates:
+        raise ValueError("No candidate configuration to choose from.")
+
+    def least_distorted(pool):
+        return min(pool, key=lambda c: (c.distortion, c.rank)) if pool else None
+
+    def opposite(of: Candidate) -> Candidate | None:
+        rest = [c for c in candidates if c is not of]
+        if not orientation_reliable:
+            return least_distorted(rest)
+        preserving = of.orientation >= 0.5
+        return least_distorted([c for c in rest if (c.orientation >= 0.5) != preserving]) or least_distorted(rest)
+
+    if symmetry == "cost":
+        chosen = candidates[0]
+        return chosen, opposite(chosen)
+    if orientation_reliable:
+        best = least_distorted([c for c in candidates if c.orientation >= 0.5]) or least_distorted(candidates)
+    else:
+        best = least_distorted(candidates)
+    other = opposite(best)
+    if symmetry == "mirror" and other is not None:
+        return other, best
+    return best, other

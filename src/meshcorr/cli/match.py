@@ -56,9 +56,20 @@ def add_parser(sub) -> None:
                    help="map only the largest connected component of each mesh instead of "
                         "failing on meshes with several components")
     g.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    g.add_argument("--symmetry", choices=("auto", "cost", "mirror"), default="auto",
+                   help="choice among near-tied eigenvector configurations: auto keeps the "
+                        "orientation-preserving map (resolves the left/right mirror), cost the cheapest "
+                        "configuration (the paper), mirror the other one (default: auto)")
+    g.add_argument("--refine", action=argparse.BooleanOptionalAction, default=True,
+                   help="refine the map by ZoomOut spectral upsampling (default: on)")
+    g.add_argument("--anchor-scale", choices=("embedding", "geodesic"), default="embedding",
+                   help="scale of the anchor term: the embedding's length scale, or geodesics divided "
+                        "by the largest one as in the paper (default: embedding)")
     o = p.add_argument_group("output")
     o.add_argument("--json", action="store_true",
                    help="print a machine-readable summary (timings, configuration, cost) on stdout")
+    o.add_argument("--alternative-out", metavar="MAP",
+                   help="also write the alternative map (usually the left/right mirror image of MAP)")
     o.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     p.set_defaults(run=run)
 
@@ -79,14 +90,22 @@ def run(args) -> int:
     from ..io import write_map
 
     check_output_path(args.output)
+    if args.alternative_out:
+        check_output_path(args.alternative_out)
     progress = None if args.quiet else StageProgress(sys.stderr)
-    result = match(args.source, args.target, k=args.k, geodesic=args.geodesic,
+    result = match(args.source, args.target, symmetry=args.symmetry, refine=args.refine,
+                   anchor_scale=args.anchor_scale, k=args.k, geodesic=args.geodesic,
                    scale_eigenvalues=args.scale_eigenvalues, reorder=args.reorder,
                    icp_iterations=args.icp_iterations, n_anchors=args.n_anchors,
                    anchor_weight=args.anchor_weight, bijective=args.bijective,
                    largest_component=args.largest_component, random_state=args.seed,
                    progress=progress)
     write_map(args.output, result.map)
+    if args.alternative_out:
+        if result.alternative_map is None:
+            raise ParameterError(f"No alternative map to write to {args.alternative_out}: only the spectral "
+                                 "method with at least two eigenvector configurations has one.")
+        write_map(args.alternative_out, result.alternative_map)
     summary = result.summary()
     summary.update(source=args.source, target=args.target, output=args.output)
     if args.json:

@@ -1,0 +1,100 @@
+"""ZoomOut refinement: it lowers the error of a noisy map and keeps its orientation."""
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+import meshcorr
+from meshcorr import datasets as ds
+from meshcorr.errors import ParameterError
+from meshcorr.mesh import Mesh
+from meshcorr.orientation import orientation_score
+from meshcorr.refine import laplace_basis, refine_map, zoomout
+
+
+@pytest.fixture(scope="module")
+def poses():
+    """Two poses of one figure (same connectivity: the truth is the identity)."""
+    rest, bent = ds.figure(resolution=2, pose="rest"), ds.figure(resolution=2, pose="bent")
+    return Mesh(rest.vertices, rest.faces), Mesh(bent.vertices, bent.faces)
+
+
+def noisy_identity(mesh: Mesh, level: float, seed: int = 0) -> np.ndarray:
+    """Each vertex mapped to the vertex nearest to a jittered copy of itself."""
+    rng = np.random.default_rng(seed)
+    jitter = rng.normal(0.0, level * np.sqrt(mesh.area), mesh.vertices.shape)
+    return cKDTree(mesh.vertices).query(mesh.vertices + jitter)[1]
+
+
+def error(mesh: Mesh, mapping: np.ndarray) -> float:
+    return float(np.linalg.norm(mesh.vertices[mapping] - mesh.vertices, axis=1).mean() / np.sqrt(mesh.area))
+
+
+def test_laplace_basis_is_mass_orthonormal_and_cached(poses):
+    import potpourri3d as pp3d
+
+    mesh = poses[0]
+    values, phi = laplace_basis(mesh, 12)
+    mass = pp3d.vertex_areas(mesh.vertices, mesh.faces)
+    mass /= mass.sum()
+    np.testing.assert_allclose(phi.T @ (mass[:, None] * phi), np.eye(12), atol=1e-8)
+    assert abs(values[0]) < 1e-8 and np.all(np.diff(values) >= -1e-12)
+    assert laplace_basis(mesh, 12)[1] is phi and not phi.flags.writeable
+
+
+def test_refinement_lowers_the_error_of_a_noisy_pose_map(poses):
+    rest, bent = poses
+    start = noisy_identity(bent, 0.03)
+    before = error(bent, start)
+    refined, history = refine_map(rest, bent, start, k=30)
+    after = error(bent, refined)
+    assert after < 0.5 * before, (before, after)
+    assert orientation_score(rest, bent, refined) > 0.9
+    assert history[0]["k"] == 16 and history[-1]["k"] == 30
+
+
+def test_refinement_does_not_flip_a_mirrored_map():
+    # An exactly symmetric ellipsoid: the reflection z -> -z is an isometry.
+    V, F = ds.sphere(subdivisions=3)
+    V = V * [2.0, 1.0, 0.7]
+    mesh = Mesh(V, F)
+    mirror = cKDTree(V).query(V * [1, 1, -1])[1]
+    jitter = cKDTree(V).query(V[mirror] + np.random.default_rng(1).normal(0, 0.03, V.shape))[1]
+    refined, _ = refine_map(mesh, mesh, jitter, k=20)
+    assert orientation_score(mesh, mesh, refined) < 0.2
+    assert np.linalg.norm(V[refined] - V[mirror], axis=1).mean() < np.linalg.norm(V[jitter] - V[mirror], axis=1).mean()
+
+
+def test_bijective_refinement_is_a_permutation(poses):
+    rest, bent = poses
+    refined, _ = refine_map(rest, bent, noisy_identity(bent, 0.02), k=20, bijective=True)
+    np.testing.assert_array_equal(np.sort(refined), np.arange(rest.n_vertices))
+
+
+def test_pipeline_refinement_improves_a_pose_pair():
+    rest, bent = (Mesh(s.vertices, s.faces) for s in (ds.figure(pose="rest"), ds.figure(pose="bent")))
+    plain = meshcorr.match(rest, bent, refine=False, reorder="signs")
+    refined = meshcorr.match(rest, bent, reorder="signs")
+    assert error(bent, refined.map) < error(bent, plain.map)
+    assert refined.refine_history and refined.summary()["refine"]["iterations"] == len(refined.refine_history)
+    assert "refine" in refined.timings and "refine" not in plain.timings
+
+
+def test_refine_errors(poses):
+    rest, bent = poses
+    identity = np.arange(rest.n_vertices)
+    with pytest.raises(ParameterError, match="one target vertex"):
+        refine_map(rest, bent, identity[:-1])
+    with pytest.raises(ParameterError, match="one target vertex"):
+        refine_map(rest, bent, identity + 1)
+    with pytest.raises(ParameterError, match="'refine_k' parameter must be an int >= 2"):
+        refine_map(rest, bent, identity, k=1)
+    phi = np.ones((10, 4))
+    with pytest.raises(ParameterError, match="same size"):
+        zoomout(phi, np.ones((10, 5)), np.arange(10))
+    with pytest.raises(ParameterError, match="equal vertex counts"):
+        zoomout(phi, np.ones((12, 4)), np.arange(10), k_start=2, bijective=True)
+    with pytest.raises(ParameterError, match="refine_step"):
+        zoomout(phi, phi, np.arange(10), k_start=2, step=0)
+    with pytest.raises(ParameterError, match="refine_k_start"):
+        zoomout(phi, phi, np.arange(10), k_start=5)

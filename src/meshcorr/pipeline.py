@@ -49,6 +49,7 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
           bijective: bool = False, largest_component: bool = False, random_state: int | None = 0,
           progress: StageProgress | None = None, mode: str = "auto", n_landmarks: int = N_LANDMARKS,
           max_memory: int | str | None = None, scalable_above: int = SCALABLE_ABOVE,
+          method: str = "spectral", prealign: bool = True,
           symmetry: str = "auto", refine: bool = True, refine_k: int = REFINE_K,
           anchor_scale: str = "embedding") -> Correspondence:
     """Dense vertex correspondence from ``source`` to ``target``.
@@ -99,6 +100,13 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
         refuses larger inputs. Default: 80 % of the memory available now.
     scalable_above : int
         Vertex count above which "auto" picks the scalable mode.
+    method : {"spectral", "shapiro-brady", "shapiro-brady-scaled", "tps-rpm", "icp", "shape-context"}
+        "spectral" is this pipeline; the others are the paper's baselines
+        (:mod:`meshcorr.baselines`), which take ``k``, ``geodesic``,
+        ``bijective`` and ``largest_component`` where they apply and ignore
+        the other options here.
+    prealign : bool
+        Pre-align the inputs to their principal axes (spatial baselines only).
     symmetry : {"auto", "cost", "mirror"}
         How to choose among near-tied eigenvector configurations (the
         left/right mirror, :mod:`meshcorr.symmetry`): "auto" keeps the least
@@ -120,6 +128,13 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
     result : Correspondence
         ``result.map[i]`` is the target vertex of source vertex i.
     """
+    from .baselines import METHODS, applicable_options, run_method  # imports this module
+
+    if check_choice("method", method, tuple(METHODS)) != "spectral":
+        common = dict(k=k, geodesic=geodesic, bijective=bijective, largest_component=largest_component)
+        return run_method(method, source, target, prealign=prealign, random_state=random_state,
+                          progress=progress, **applicable_options(method, common))
+
     k = check_int("k", k, minimum=2, maximum=10)
     check_choice("geodesic", geodesic, GEODESIC_METHODS)
     check_choice("reorder", reorder, REORDER_MODES)

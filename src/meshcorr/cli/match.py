@@ -7,6 +7,7 @@ import json
 import os
 import sys
 
+from ..baselines import METHODS, SPATIAL_METHODS
 from ..errors import ParameterError
 from ..geodesics import GEODESIC_METHODS
 from ..reorder import REORDER_MODES
@@ -19,6 +20,16 @@ Compute a dense vertex-to-vertex map from SOURCE to TARGET with the spectral
 method of Jain & Zhang (2006): geodesic distances -> Gaussian affinities ->
 spectral embedding scaled by sqrt(eigenvalues) -> eigenvector reordering and
 sign correction -> thin-plate-spline ICP -> proximity-aided matching.
+
+--method picks one of the paper's baselines instead: shapiro-brady (Shapiro &
+Brady 1992: unscaled eigenvectors, greedy signs, nearest match),
+shapiro-brady-scaled (the same with eigenvalue scaling), tps-rpm (Chui &
+Rangarajan 2003), icp (robust similarity ICP, Besl & McKay 1992) or
+shape-context (3D shape contexts, Belongie et al. 2002 / Frome et al. 2004).
+The Shapiro-Brady variants use -k, --geodesic, --bijective and
+--largest-component; the spatial ones (tps-rpm, icp, shape-context) use
+--bijective, --largest-component, --seed and --no-prealign. Options that do
+not apply to the chosen method are ignored.
 
 Meshes: OFF, OBJ, PLY or STL triangle meshes (vertex order is kept as in the
 file). Output: line i of MAP holds the 0-based index of the TARGET vertex
@@ -35,6 +46,12 @@ def add_parser(sub) -> None:
     p.add_argument("-o", "--output", metavar="MAP", required=True,
                    help="where to write the map (.txt: one index per line; .npy: NumPy array)")
     g = p.add_argument_group("method")
+    g.add_argument("--method", choices=tuple(METHODS), default="spectral",
+                   help="the spectral method or one of the paper's baselines (default: spectral; "
+                        "see above for the options each uses)")
+    g.add_argument("--no-prealign", dest="prealign", action="store_false",
+                   help=f"do not centre, scale and rotate the inputs to their principal axes "
+                        f"before a spatial method ({', '.join(SPATIAL_METHODS)})")
     g.add_argument("-k", type=int, default=6,
                    help="eigenpairs computed; the embedding has k-1 dimensions (default: 6, the paper's)")
     g.add_argument("--geodesic", choices=GEODESIC_METHODS, default="heat",
@@ -99,7 +116,7 @@ def run(args) -> int:
                    icp_iterations=args.icp_iterations, n_anchors=args.n_anchors,
                    anchor_weight=args.anchor_weight, bijective=args.bijective,
                    largest_component=args.largest_component, random_state=args.seed,
-                   progress=progress)
+                   progress=progress, method=args.method, prealign=args.prealign)
     write_map(args.output, result.map)
     if args.alternative_out:
         if result.alternative_map is None:

@@ -2,14 +2,24 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import trimesh
 from scipy.spatial import cKDTree
 
 from meshcorr import datasets
-from meshcorr.datasets import SyntheticShape, figure, ground_truth, rigid_copy, sphere, tube
-from meshcorr.errors import ParameterError
+from meshcorr.datasets import (
+    SyntheticShape,
+    creature,
+    figure,
+    ground_truth,
+    rigid_copy,
+    sphere,
+    tube,
+)
+from meshcorr.errors import MeshError, ParameterError
 
 # two resolutions x two poses for each generator
 TUBES = {
@@ -271,10 +281,10 @@ def test_sphere():
 def test_save_example_pair(tmp_path):
     source_path, target_path, truth_path = datasets.save_example_pair(tmp_path / "ex")
     assert [p.name for p in (source_path, target_path, truth_path)] == [
-        "figure_rest.off", "figure_bent.off", "figure_rest_to_bent.gt.txt",
+        "creature_rest.off", "creature_bent.off", "creature_rest_to_bent.gt.txt",
     ]
-    source = figure(resolution=2, pose="rest")
-    target = figure(resolution=3, pose="bent", random_state=1)
+    source = creature(resolution=1, pose="rest")
+    target = creature(resolution=2, pose="bent", random_state=1)
     for shape, path in ((source, source_path), (target, target_path)):
         loaded = trimesh.load(path, process=False)
         np.testing.assert_allclose(loaded.vertices, shape.vertices, rtol=0, atol=1e-8)
@@ -283,6 +293,21 @@ def test_save_example_pair(tmp_path):
     np.testing.assert_array_equal(truth, ground_truth(source, target))
     total = sum(p.stat().st_size for p in (source_path, target_path, truth_path))
     assert total < 300_000
+
+
+def test_bundled_examples():
+    # the files in examples/ are what save_example_pair writes (checked loosely: they
+    # are regenerated on one machine, and tessellations may differ in the last bits)
+    directory = Path(__file__).resolve().parents[1] / "examples"
+    names = ["creature_rest.off", "creature_bent.off", "creature_rest_to_bent.gt.txt"]
+    assert sorted(p.name for p in directory.iterdir()) == sorted(names)
+    assert sum((directory / name).stat().st_size for name in names) < 300_000
+    source = trimesh.load(directory / names[0], process=False)
+    target = trimesh.load(directory / names[1], process=False)
+    truth = np.loadtxt(directory / names[2], dtype=np.int64)
+    assert (len(source.vertices), len(target.vertices)) == (500, 1000)
+    assert source.is_watertight and target.is_watertight
+    assert truth.shape == (500,) and truth.min() >= 0 and truth.max() < 1000
 
 
 @pytest.mark.parametrize(
@@ -303,10 +328,20 @@ def test_save_example_pair(tmp_path):
         (lambda: figure(pose=1.5), "'pose' parameter of figure"),
         (lambda: figure(pose=True), "'pose' parameter of figure"),
         (lambda: figure(random_state="0"), "'random_state' parameter of figure"),
+        (lambda: creature(resolution=0), r"'resolution' parameter of creature .* \[1, 6\]"),
+        (lambda: creature(resolution=7), "'resolution' parameter of creature"),
+        (lambda: creature(resolution=1.0), "'resolution' parameter of creature"),
+        (lambda: creature(pose="dancing"), "'pose' parameter of creature must be one of"),
+        (lambda: creature(pose=-1.5), "'pose' parameter of creature"),
+        (lambda: creature(pose=np.nan), "'pose' parameter of creature"),
+        (lambda: creature(pose=True), "'pose' parameter of creature"),
+        (lambda: creature(random_state=-1), "'random_state' parameter of creature"),
         (lambda: sphere(subdivisions=8), r"'subdivisions' parameter of sphere must be .* \[0, 7\]"),
         (lambda: sphere(radius=-1.0), "'radius' parameter of sphere"),
         (lambda: ground_truth(tube(), tube(length=5.0)), "one family"),
         (lambda: ground_truth(tube(), figure()), "one family"),
+        (lambda: ground_truth(creature(), figure()), "one family"),
+        (lambda: ground_truth(tube(), creature()), "one family"),
         (lambda: ground_truth(np.zeros((3, 3)), tube()), "'source' parameter of ground_truth"),
         (lambda: rigid_copy(tube(), rotation=np.diag([1.0, 1.0, -1.0])), "'rotation' parameter"),
         (lambda: rigid_copy(tube(), rotation=2 * np.eye(3)), "'rotation' parameter"),
@@ -319,3 +354,166 @@ def test_save_example_pair(tmp_path):
 def test_invalid_parameters_raise(call, match):
     with pytest.raises(ParameterError, match=match):
         call()
+
+
+# --------------------------------------------------------------------------
+# creature
+# --------------------------------------------------------------------------
+
+CREATURES = {
+    "r1-rest": dict(resolution=1),
+    "r1-curled": dict(resolution=1, pose="curled", random_state=1),
+    "r2-bent": dict(resolution=2, pose="bent", random_state=1),
+    "r1-none-reverse": dict(resolution=1, pose=-1.0, random_state=None),
+}
+POSES = ["bent", "curled", -1.0, 0.5]
+
+
+def _limb_labels(shape: SyntheticShape) -> np.ndarray:
+    return datasets._creature_labels(datasets._creature_directions(shape.params))
+
+
+@pytest.mark.parametrize("kwargs", CREATURES.values(), ids=CREATURES.keys())
+def test_creature_closed_oriented_manifold(kwargs):
+    shape = creature(**kwargs)
+    mesh = _mesh(shape)
+    assert shape.chart == "creature" and shape.params.shape == (shape.n_vertices, 2)
+    assert shape.vertices.dtype == np.float64 and shape.faces.dtype == np.int64
+    assert mesh.is_watertight and mesh.is_winding_consistent
+    assert mesh.volume > 0  # outward normals
+    assert mesh.body_count == 1 and mesh.euler_number == 2  # one sphere-like component
+    assert len(np.unique(shape.faces.ravel())) == shape.n_vertices
+    assert len(np.unique(np.sort(shape.faces, axis=1), axis=0)) == len(shape.faces)
+    assert np.degrees(mesh.face_angles.min()) > 10.0  # no sliver; near-equilateral
+    edges = mesh.edges_unique_length
+    assert edges.max() < 3.0 * edges.mean()
+
+
+def test_creature_vertex_counts_and_limbs():
+    assert [creature(resolution=r).n_vertices for r in (1, 2)] == [500, 1000]
+    mean_edges = [_mesh(creature(resolution=r)).edges_unique_length.mean() for r in (1, 2)]
+    assert 0.15 < mean_edges[0] < 0.25
+    np.testing.assert_allclose(mean_edges[0] / mean_edges[1], np.sqrt(2), rtol=0.1)
+    # five limbs of clearly different lengths: the farthest vertex of each from the centre
+    shape = creature(resolution=2)
+    labels = _limb_labels(shape)
+    reach = [np.linalg.norm(shape.vertices[labels == k], axis=1).max() for k in range(5)]
+    np.testing.assert_allclose(reach, 0.7 + np.array([3.0, 2.0, 1.4, 1.0, 0.7]), atol=0.05)
+    assert set(np.unique(labels)) == {-1, 0, 1, 2, 3, 4}
+
+
+@pytest.mark.parametrize("pose", ["rest", *POSES])
+def test_creature_limbs_never_touch(pose):
+    rest = creature(resolution=2)
+    shape = creature(resolution=2, pose=pose)
+    labels = _limb_labels(shape)
+    # different limbs stay apart
+    for k in range(5):
+        tree = cKDTree(shape.vertices[labels == k])
+        for j in range(k):
+            assert tree.query(shape.vertices[labels == j])[0].min() > 0.15
+    # vertices close in space were close in the rest pose: no new contact
+    pairs = cKDTree(shape.vertices).query_pairs(0.25, output_type="ndarray")
+    assert np.linalg.norm(rest.vertices[pairs[:, 0]] - rest.vertices[pairs[:, 1]], axis=1).max() < 0.6
+
+
+def test_creature_poses_share_connectivity_and_chart():
+    rest = creature(resolution=1)
+    for pose in POSES:
+        posed = creature(resolution=1, pose=pose)
+        np.testing.assert_array_equal(posed.faces, rest.faces)
+        np.testing.assert_array_equal(posed.params, rest.params)
+        assert not np.allclose(posed.vertices, rest.vertices)
+        np.testing.assert_array_equal(ground_truth(rest, posed), np.arange(rest.n_vertices))
+    np.testing.assert_array_equal(creature(pose=0.0).vertices, rest.vertices)
+    np.testing.assert_array_equal(creature(pose=1.0).vertices, creature(pose="bent").vertices)
+    # the body stays put; only limb vertices move
+    moved = np.linalg.norm(creature(pose="curled").vertices - rest.vertices, axis=1) > 0
+    assert np.all(_limb_labels(rest)[moved] >= 0)
+
+
+def test_creature_poses_are_near_isometric():
+    rest = creature(resolution=2)
+    edges = _mesh(rest).edges_unique
+    before = _edge_lengths(rest, edges)
+    for pose in POSES:
+        posed = creature(resolution=2, pose=pose)
+        change = np.abs(_edge_lengths(posed, edges) - before) / before
+        assert np.median(change) < 0.02  # in fact 0: the parts between hinges move rigidly
+        assert np.mean(change) < 0.05
+        np.testing.assert_allclose(_mesh(posed).volume, _mesh(rest).volume, rtol=0.01)
+
+
+def test_creature_deterministic_and_seeded():
+    a = creature(random_state=1)
+    params, faces, _ = datasets._creature_mesh.__wrapped__(1, 1)  # rebuilt, not cached
+    np.testing.assert_array_equal(params, a.params)
+    np.testing.assert_array_equal(faces, a.faces)
+    other, regular = creature(random_state=0), creature(random_state=None)
+    for shape in (other, regular):
+        assert shape.n_vertices == a.n_vertices and not np.array_equal(shape.params, a.params)
+    with pytest.raises(ValueError):
+        a.vertices[0, 0] = 1.0
+
+
+def test_creature_ground_truth_identity_and_rigid_copy():
+    shape = creature(resolution=1, pose="bent")
+    np.testing.assert_array_equal(ground_truth(shape, shape), np.arange(shape.n_vertices))
+    copy, perm = rigid_copy(shape, scale=2.5, random_state=5)
+    assert copy.chart == "creature"
+    assert not np.array_equal(perm, np.arange(shape.n_vertices))
+    np.testing.assert_array_equal(ground_truth(shape, copy), perm)  # the nearest-neighbour path
+    np.testing.assert_array_equal(ground_truth(copy, shape), np.argsort(perm))
+
+
+@pytest.mark.parametrize(
+    ("source", "target"),
+    [
+        (dict(resolution=1), dict(resolution=2, random_state=1)),
+        (dict(resolution=2, random_state=1), dict(resolution=1)),
+        (dict(resolution=1), dict(resolution=1, random_state=None)),
+    ],
+    ids=["r1-r2", "r2-r1", "seed0-none"],
+)
+def test_creature_ground_truth_across_resolutions(source, target):
+    a, b = creature(**source), creature(**target)
+    truth = ground_truth(a, b)
+    mean_edge = _mesh(b).edges_unique_length.mean()
+    distance = np.linalg.norm(a.vertices - b.vertices[truth], axis=1)
+    assert distance.max() < 1.5 * mean_edge
+    assert distance.mean() < 0.5 * mean_edge
+    # the truth does not depend on the poses, and is found on the same limb
+    bent = creature(**{**target, "pose": "curled"})
+    np.testing.assert_array_equal(ground_truth(creature(**source, pose="bent"), bent), truth)
+    beyond_fillets = np.linalg.norm(datasets._creature_rest(
+        datasets._creature_directions(a.params)), axis=1) > 1.2
+    np.testing.assert_array_equal(_limb_labels(b)[truth][beyond_fillets],
+                                  _limb_labels(a)[beyond_fillets])
+
+
+def test_creature_ground_truth_tip_to_tip():
+    # the chart shrinks exponentially along a limb; the truth must still be local there
+    a, b = creature(resolution=1), creature(resolution=2, random_state=1)
+    tips = [np.argmax(shape.vertices @ datasets._CREATURE[0].frame[0]) for shape in (a, b)]
+    truth = ground_truth(a, b)
+    tip_edge = np.linalg.norm(b.vertices[truth[tips[0]]] - b.vertices[tips[1]])
+    assert tip_edge < 0.2
+
+
+@pytest.mark.parametrize("pose", ["rest", "curled"])
+def test_creature_spectrum_is_well_separated(pose):
+    # the geodesic Gaussian affinity (sigma = largest geodesic) of meshcorr.embedding has
+    # distinct top eigenvalues, unlike the tube-like figure(): its eigenvectors do not mix
+    from meshcorr.embedding import gaussian_affinity, top_eigenpairs
+    from meshcorr.mesh import as_mesh
+
+    shape = creature(resolution=1, pose=pose)
+    distances = as_mesh((shape.vertices, shape.faces)).geodesic_matrix("heat")
+    values, _ = top_eigenpairs(gaussian_affinity(distances), 7)
+    gaps = values[1:6] / values[2:7] - 1.0
+    assert np.all(gaps > 0.2)
+
+
+def test_synthetic_shape_chart_is_checked():
+    with pytest.raises(MeshError, match="chart"):
+        SyntheticShape(np.zeros((3, 3)), [[0, 1, 2]], np.zeros((3, 2)), "x", chart="torus")

@@ -40,8 +40,8 @@ def test_ranked_list_is_ascending_after_the_choice(embeddings):
     costs = [c.cost for c in ranked]
     assert costs == sorted(costs)
     assert len({(c.perm, c.signs) for c in ranked}) == len(ranked)
-    # Pre-scoring on samples keeps 64 candidates, re-scored exactly.
-    assert len(ranked) == 64
+    # Pre-scoring on samples keeps 16 candidates (n_rescore), re-scored exactly.
+    assert len(ranked) == 16
     assert ranked[1].cost == pytest.approx(configuration_cost(X, Y, ranked[1].perm, ranked[1].signs))
 
 

@@ -18,8 +18,22 @@ divides by each mesh's largest geodesic distance). With ``bijective=True``
 and equal vertex counts the argmin becomes a linear assignment
 (``scipy.optimize.linear_sum_assignment``).
 
-Everything is computed in row blocks, so memory stays at ``block x n2``
-except for the bijective option, which needs the whole cost matrix.
+Small problems (``n1 * n2 <= EXACT_PAIRS``) are computed in row blocks, so
+memory stays at ``block x n2``. Larger ones never form ``n1 x n2`` blocks:
+
+- :func:`proximity_matching` takes each row's cheapest of its nearest
+  target points in the combined space :math:`(Y_j, F_j)` (KD-tree). That
+  Euclidean distance never exceeds the cost
+  (:math:`\\sqrt{a^2 + \\lVert b \\rVert_2^2} \\le a + \\lVert b \\rVert_1`),
+  so a row is **exact** once its farthest candidate is farther than its
+  cheapest cost; unsettled rows double their candidates (8 up to 64) and
+  then keep the cheapest found (**approximate** for those rows).
+- :func:`select_anchors` is **approximate**: pairs are restricted to each
+  source vertex's ``N_CANDIDATES`` nearest target vertices in the embedding
+  (the first anchor, the closest pair, is still exact; later ones may miss
+  a pair whose embedding distance is not among a vertex's nearest).
+
+The bijective option always needs the whole cost matrix.
 """
 
 from __future__ import annotations
@@ -28,6 +42,7 @@ from typing import Callable
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
+from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
 from .errors import ParameterError
@@ -35,6 +50,12 @@ from .errors import ParameterError
 RowsFn = Callable[[int], np.ndarray]
 
 _BLOCK_ELEMENTS = 4_000_000  # ~32 MB of float64 per block
+
+#: Largest ``n1 * n2`` matched by the exact dense (row block) computation.
+EXACT_PAIRS = 4_000_000
+
+#: Target candidates per source vertex in anchor selection beyond ``EXACT_PAIRS``.
+N_CANDIDATES = 16
 
 
 def _blocks(n1: int, n2: int):
@@ -62,9 +83,13 @@ def select_anchors(X: np.ndarray, Y: np.ndarray, source_geodesics: RowsFn, targe
     Returns
     -------
     anchors : (h, 2) int
-        Rows ``(a_l, b_l)``: source vertex, target vertex.
+        Rows ``(a_l, b_l)``: source vertex, target vertex. Beyond
+        ``EXACT_PAIRS`` pairs, chosen among each source vertex's
+        ``N_CANDIDATES`` nearest target vertices (see the module docstring).
     """
     n1, n2 = len(X), len(Y)
+    if n1 * n2 > EXACT_PAIRS:
+        return _select_anchors_candidates(X, Y, source_geodesics, target_geodesics, n_anchors)
     p1, p2 = np.zeros(n1), np.zeros(n2)
     anchors = np.empty((n_anchors, 2), dtype=np.int64)
     for l in range(n_anchors):
@@ -83,6 +108,28 @@ def select_anchors(X: np.ndarray, Y: np.ndarray, source_geodesics: RowsFn, targe
         anchors[l] = best_ij
         p1 += 0.5 * source_geodesics(best_ij[0])
         p2 += 0.5 * target_geodesics(best_ij[1])
+    return anchors
+
+
+def _select_anchors_candidates(X, Y, source_geodesics: RowsFn, target_geodesics: RowsFn,
+                               n_anchors: int) -> np.ndarray:
+    """:func:`select_anchors` over each source vertex's nearest target vertices only."""
+    n1 = len(X)
+    Z, J = cKDTree(Y).query(X, k=min(N_CANDIDATES, len(Y)), workers=-1)
+    Z, J = Z.reshape(n1, -1), J.reshape(n1, -1)
+    p1, p2 = np.zeros(n1), np.zeros(len(Y))
+    used1, used2 = np.zeros(n1, dtype=bool), np.zeros(len(Y), dtype=bool)
+    anchors = np.empty((n_anchors, 2), dtype=np.int64)
+    for l in range(n_anchors):
+        value = Z - p1[:, None] - p2[J]
+        value[used1] = np.inf
+        value[used2[J]] = np.inf
+        flat = int(np.argmin(value))
+        a, b = flat // J.shape[1], int(J.flat[flat])
+        anchors[l] = a, b
+        used1[a] = used2[b] = True
+        p1 += 0.5 * source_geodesics(a)
+        p2 += 0.5 * target_geodesics(b)
     return anchors
 
 
@@ -137,6 +184,8 @@ def proximity_matching(X: np.ndarray, Y: np.ndarray, F1: np.ndarray, F2: np.ndar
         mapping = np.empty(n1, dtype=np.int64)
         mapping[rows] = cols
         return mapping, C[np.arange(n1), mapping]
+    if n1 * n2 > EXACT_PAIRS:
+        return _candidate_matching(X, Y, F1, F2)
     mapping = np.empty(n1, dtype=np.int64)
     cost = np.empty(n1)
     for rows in _blocks(n1, n2):
@@ -145,3 +194,47 @@ def proximity_matching(X: np.ndarray, Y: np.ndarray, F1: np.ndarray, F2: np.ndar
         mapping[rows] = j
         cost[rows] = C[np.arange(len(j)), j]
     return mapping, cost
+
+
+def _candidate_matching(X, Y, F1, F2, *, k: int = 8, k_max: int = 64) -> tuple[np.ndarray, np.ndarray]:
+    """Row-wise argmin of the matching cost over KD-tree candidates, without ``n1 x n2`` blocks.
+
+    The Euclidean distance between combined points ``[X_i, F1_i]`` and
+    ``[Y_j, F2_j]`` is a lower bound of the cost ``||X_i - Y_j|| + |F1_i - F2_j|_1``:
+    target points beyond a row's cheapest candidate in that distance cannot
+    beat it, so such a row is exact. Unsettled rows double ``k`` up to
+    ``k_max`` and then keep their cheapest candidate (approximate). Ties go
+    to the lower target index, as in the dense path.
+    """
+    n1, n2 = len(X), len(Y)
+    P = np.hstack([X, F1]) if F1.size else X
+    tree = cKDTree(np.hstack([Y, F2]) if F2.size else Y)
+    mapping = np.empty(n1, dtype=np.int64)
+    cost = np.full(n1, np.inf)
+    todo = np.arange(n1)
+    while len(todo):
+        kk = min(k, n2)
+        unsettled = []
+        step = max(1, _BLOCK_ELEMENTS // (8 * kk))
+        for start in range(0, len(todo), step):
+            rows = todo[start:start + step]
+            bound, J = tree.query(P[rows], k=kk, workers=-1)
+            bound, J = bound.reshape(len(rows), kk), J.reshape(len(rows), kk)
+            C = _pair_cost(X, Y, F1, F2, np.repeat(rows, kk), J.ravel()).reshape(len(rows), kk)
+            cheapest = C.min(axis=1)
+            mapping[rows] = np.where(C == cheapest[:, None], J, n2).min(axis=1)  # ties: lowest index
+            cost[rows] = cheapest
+            unsettled.append(rows[(kk < n2) & (bound[:, -1] <= cheapest)])
+        todo = np.concatenate(unsettled)
+        if k >= k_max:
+            break
+        k *= 2
+    return mapping, cost
+
+
+def _pair_cost(X, Y, F1, F2, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Matching cost of the pairs ``(i[t], j[t])``, ``(len(i),)``."""
+    c = np.linalg.norm(X[i] - Y[j], axis=1)
+    if F1.size:
+        c += np.abs(F1[i] - F2[j]).sum(axis=1)
+    return c

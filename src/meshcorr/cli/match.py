@@ -10,6 +10,7 @@ import sys
 from ..baselines import METHODS, SPATIAL_METHODS
 from ..errors import ParameterError
 from ..geodesics import GEODESIC_METHODS
+from ..modes import MODES, N_LANDMARKS, SCALABLE_ABOVE
 from ..reorder import REORDER_MODES
 from ._progress import StageProgress
 
@@ -82,6 +83,16 @@ def add_parser(sub) -> None:
     g.add_argument("--anchor-scale", choices=("embedding", "geodesic"), default="embedding",
                    help="scale of the anchor term: the embedding's length scale, or geodesics divided "
                         "by the largest one as in the paper (default: embedding)")
+    s = p.add_argument_group("scale")
+    s.add_argument("--mode", choices=MODES, default="auto",
+                   help="dense: all-pairs geodesics and exact eigenpairs (n x n memory, the reference); "
+                        f"scalable: landmark geodesics and the Nystrom extension; auto: dense up to "
+                        f"{SCALABLE_ABOVE} vertices if it fits in --max-memory, else scalable (default: auto)")
+    s.add_argument("--landmarks", type=int, default=N_LANDMARKS, dest="n_landmarks", metavar="N",
+                   help=f"landmark vertices of the scalable mode (default: {N_LANDMARKS})")
+    s.add_argument("--max-memory", metavar="SIZE", default=None,
+                   help="memory the dense mode may use, e.g. 4GiB or 500MB; larger inputs are refused "
+                        "(default: 80%% of the memory available)")
     o = p.add_argument_group("output")
     o.add_argument("--json", action="store_true",
                    help="print a machine-readable summary (timings, configuration, cost) on stdout")
@@ -116,7 +127,8 @@ def run(args) -> int:
                    icp_iterations=args.icp_iterations, n_anchors=args.n_anchors,
                    anchor_weight=args.anchor_weight, bijective=args.bijective,
                    largest_component=args.largest_component, random_state=args.seed,
-                   progress=progress, method=args.method, prealign=args.prealign)
+                   progress=progress, method=args.method, prealign=args.prealign, mode=args.mode,
+                   n_landmarks=args.n_landmarks, max_memory=args.max_memory)
     write_map(args.output, result.map)
     if args.alternative_out:
         if result.alternative_map is None:

@@ -40,8 +40,9 @@ class Correspondence:
     configuration : Configuration
         The chosen eigenvector permutation and signs.
     alternatives : list of Configuration
-        All ranked configurations, chosen first; ``alternatives[1]`` is the
-        runner-up (often the mirror-image map on symmetric shapes).
+        All ranked configurations: the chosen one first, then the
+        alternative candidate (usually the mirror-image map on symmetric
+        shapes; see ``candidates``), then the rest in ascending cost.
     anchors : (h, 2) int
         Anchor pairs (source vertex, target vertex), input numbering.
     icp_history : list of dict

@@ -55,7 +55,7 @@ class ICPResult:
 
 
 def tps_icp(X: np.ndarray, Y: np.ndarray, *, max_iter: int = 10, n_control: int = 500,
-            anneal: float = 0.5, tol: float = 0.03, rtol: float = 0.01, max_points: int = 20000,
+            anneal: float = 0.5, tol: float = 0.03, rtol: float = 0.01, max_points: int = 2000,
             random_state: int | None = 0) -> ICPResult:
     """Warp the target embedding onto the source embedding.
 
@@ -77,11 +77,14 @@ def tps_icp(X: np.ndarray, Y: np.ndarray, *, max_iter: int = 10, n_control: int 
         ... or when the warp lowered the mean matching cost by less than this
         relative amount (the last matches to change are then near-ties).
     max_points : int
-        Larger embeddings iterate on seeded subsets of this many source and
-        target points (control points are drawn from the source subset, the
-        history's costs are means over the subsets); the last warp is then
-        applied to every target point and every source point matched once.
-        Below the limit every point is used, exactly as described above.
+        Larger embeddings iterate on seeded subsets of this many (at least
+        ``n_control``) source and target points: control points are drawn
+        from the source subset and the history's costs are means over the
+        subsets; the last warp is then applied to every target point and
+        every source point matched once. Below the limit every point is
+        used, exactly as described above. Measured on 8 TOSCA 5k pairs
+        (scalable mode): mean error 0.087 with 2000, 0.089 with every point,
+        at a quarter of the time.
     random_state : int or None
         Seed of the control subset.
 
@@ -94,7 +97,7 @@ def tps_icp(X: np.ndarray, Y: np.ndarray, *, max_iter: int = 10, n_control: int 
     anneal = check_float("anneal", anneal, minimum=0.0, exclusive=True, maximum=1.0)
     tol = check_float("tol", tol, minimum=0.0)
     rtol = check_float("rtol", rtol, minimum=0.0)
-    max_points = check_int("max_points", max_points, minimum=n_control)
+    max_points = max(check_int("max_points", max_points, minimum=1), n_control)
     rng = np.random.default_rng(random_state)
     # Small dense solves and products: threaded BLAS only adds synchronisation
     # (3-10x slower on a loaded 2-core machine).

@@ -21,13 +21,15 @@ and equal vertex counts the argmin becomes a linear assignment
 Small problems (``n1 * n2 <= EXACT_PAIRS``) are computed in row blocks, so
 memory stays at ``block x n2``. Larger ones never form ``n1 x n2`` blocks:
 
-- :func:`proximity_matching` takes each row's cheapest of its nearest
-  target points in the combined space :math:`(Y_j, F_j)` (KD-tree). That
-  Euclidean distance never exceeds the cost
-  (:math:`\\sqrt{a^2 + \\lVert b \\rVert_2^2} \\le a + \\lVert b \\rVert_1`),
-  so a row is **exact** once its farthest candidate is farther than its
-  cheapest cost; unsettled rows double their candidates (8 up to 64) and
-  then keep the cheapest found (**approximate** for those rows).
+- :func:`proximity_matching` takes each row's cheapest of its
+  ``N_CANDIDATES`` nearest target points in the combined space
+  :math:`(Y_j, F_j)` (KD-tree). That Euclidean distance never exceeds the
+  cost (:math:`\\sqrt{a^2 + \\lVert b \\rVert_2^2} \\le a + \\lVert b \\rVert_1`),
+  so a row is **exact** when its farthest candidate is farther than its
+  cheapest cost and **approximate** otherwise: on dense meshes the two
+  shapes' points lie apart by more than the vertex spacing, and most rows
+  are (the pick is then among the nearest in a metric within a factor
+  :math:`\\sqrt{1 + h}` of the cost's).
 - :func:`select_anchors` is **approximate**: pairs are restricted to each
   source vertex's ``N_CANDIDATES`` nearest target vertices in the embedding
   (the first anchor, the closest pair, is still exact; later ones may miss
@@ -196,39 +198,29 @@ def proximity_matching(X: np.ndarray, Y: np.ndarray, F1: np.ndarray, F2: np.ndar
     return mapping, cost
 
 
-def _candidate_matching(X, Y, F1, F2, *, k: int = 8, k_max: int = 64) -> tuple[np.ndarray, np.ndarray]:
+def _candidate_matching(X, Y, F1, F2, *, k: int = N_CANDIDATES) -> tuple[np.ndarray, np.ndarray]:
     """Row-wise argmin of the matching cost over KD-tree candidates, without ``n1 x n2`` blocks.
 
-    The Euclidean distance between combined points ``[X_i, F1_i]`` and
-    ``[Y_j, F2_j]`` is a lower bound of the cost ``||X_i - Y_j|| + |F1_i - F2_j|_1``:
-    target points beyond a row's cheapest candidate in that distance cannot
-    beat it, so such a row is exact. Unsettled rows double ``k`` up to
-    ``k_max`` and then keep their cheapest candidate (approximate). Ties go
-    to the lower target index, as in the dense path.
+    Each source vertex takes the cheapest of its ``k`` nearest target points
+    in the combined space ``[Y_j, F2_j]`` (Euclidean), a lower bound of the
+    cost ``||X_i - Y_j|| + |F1_i - F2_j|_1``: the row is exact when its
+    ``k``-th candidate is farther than its cheapest cost, approximate
+    otherwise. Ties go to the lower target index, as in the dense path.
     """
     n1, n2 = len(X), len(Y)
     P = np.hstack([X, F1]) if F1.size else X
     tree = cKDTree(np.hstack([Y, F2]) if F2.size else Y)
+    k = min(k, n2)
     mapping = np.empty(n1, dtype=np.int64)
-    cost = np.full(n1, np.inf)
-    todo = np.arange(n1)
-    while len(todo):
-        kk = min(k, n2)
-        unsettled = []
-        step = max(1, _BLOCK_ELEMENTS // (8 * kk))
-        for start in range(0, len(todo), step):
-            rows = todo[start:start + step]
-            bound, J = tree.query(P[rows], k=kk, workers=-1)
-            bound, J = bound.reshape(len(rows), kk), J.reshape(len(rows), kk)
-            C = _pair_cost(X, Y, F1, F2, np.repeat(rows, kk), J.ravel()).reshape(len(rows), kk)
-            cheapest = C.min(axis=1)
-            mapping[rows] = np.where(C == cheapest[:, None], J, n2).min(axis=1)  # ties: lowest index
-            cost[rows] = cheapest
-            unsettled.append(rows[(kk < n2) & (bound[:, -1] <= cheapest)])
-        todo = np.concatenate(unsettled)
-        if k >= k_max:
-            break
-        k *= 2
+    cost = np.empty(n1)
+    step = max(1, _BLOCK_ELEMENTS // (8 * k))
+    for start in range(0, n1, step):
+        rows = np.arange(start, min(n1, start + step))
+        _, J = tree.query(P[rows], k=k, workers=-1)
+        J = J.reshape(len(rows), k)
+        C = _pair_cost(X, Y, F1, F2, np.repeat(rows, k), J.ravel()).reshape(len(rows), k)
+        cost[rows] = C.min(axis=1)
+        mapping[rows] = np.where(C == cost[rows, None], J, n2).min(axis=1)  # ties: lowest index
     return mapping, cost
 
 

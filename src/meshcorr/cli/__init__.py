@@ -16,9 +16,11 @@ from ..errors import MeshcorrError
 from . import bench as _bench
 from . import evaluate as _evaluate
 from . import match as _match
+from . import show as _show
+from . import transfer as _transfer
 
 #: Sub-command modules, in the order ``--help`` lists them.
-COMMANDS = [_match, _evaluate, _bench]
+COMMANDS = [_match, _evaluate, _bench, _show, _transfer]
 
 EXIT_USAGE = 2
 EXIT_ERROR = 1

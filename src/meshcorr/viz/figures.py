@@ -1,0 +1,215 @@
+"""The paper's pictures: colour transfer through a map, eigenvectors, the spectral embedding.
+
+- :func:`correspondence_figure` -- the target coloured by part, the source
+  coloured through the map (Jain & Zhang 2006, Figures 7-8); optionally the
+  ground-truth colouring, or each source vertex's geodesic error.
+- :func:`spectrum_figure` -- the first eigenvectors of the Gaussian affinity
+  matrix as colour plots with their eigenvalues (Figure 6), and the 3-D
+  spectral embedding drawn as a mesh (Figure 2).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._params import check_int
+from ..embedding import gaussian_affinity, top_eigenpairs
+from ..errors import ParameterError
+from ..evaluation import geodesic_errors
+from ..mesh import as_mesh
+from ..transfer import check_map, pull_back
+from .colors import UNMAPPED_COLOR, mesh_coloring, scalar_colors
+from .render import Panel, render_panels
+
+__all__ = ["correspondence_errors", "correspondence_figure", "spectrum_figure"]
+
+
+def correspondence_errors(target, mapping: np.ndarray, truth: np.ndarray, *,
+                          geodesic: str = "heat") -> np.ndarray:
+    """Geodesic error of each source vertex, normalised by sqrt(target area).
+
+    Parameters
+    ----------
+    target : (vertices, faces) or mesh-like
+        The mesh the maps point into (validated: one component, manifold).
+    mapping, truth : (n_source,) int
+        Predicted and true target vertex of each source vertex (-1: none).
+    geodesic : str
+        Geodesic solver.
+
+    Returns
+    -------
+    errors : (n_source,) float
+        NaN where either map leaves the vertex unmapped.
+    """
+    mapping, truth = np.asarray(mapping), np.asarray(truth)
+    both = (mapping >= 0) & (truth >= 0)
+    errors = np.full(len(mapping), np.nan)
+    if both.any():
+        mesh = as_mesh(target, name="target")
+        errors[both] = geodesic_errors(mesh, mapping[both], truth[both], method=geodesic)
+    return errors
+
+
+def correspondence_figure(source, target, mapping, path, *, truth=None, error: bool = False,
+                          coloring: str = "parts", geodesic: str = "heat", elev: float = 30.0,
+                          azim: float = -60.0, up: str = "z", dpi: int = 100,
+                          map_name: str = "the map") -> dict:
+    """Picture of a vertex map by colour transfer, written as a PNG.
+
+    The target is coloured by ``coloring``; source vertex ``i`` takes the
+    colour of target vertex ``mapping[i]`` (grey where unmapped). With
+    ``truth``, a second row shows the source coloured through the true
+    map: the two source pictures agree where the map is right. With
+    ``error``, the source is instead coloured by each vertex's geodesic
+    error (blue: none; red: the largest), with a colour bar.
+
+    Parameters
+    ----------
+    source, target : ((n1, 3) float, (m1, 3) int), ((n2, 3) float, (m2, 3) int)
+        Vertices and faces of the two meshes.
+    mapping : (n1,) int
+        Target vertex of each source vertex, -1 where unmapped.
+    path : str or path-like
+        The PNG file.
+    truth : (n1,) int, optional
+        The true map; needed for ``error``.
+    error : bool
+        Colour the source by geodesic error instead of by transfer.
+    coloring : {"parts", "xyz"}
+        Colouring of the target (see :func:`meshcorr.viz.colors.mesh_coloring`).
+    geodesic : str
+        Geodesic solver for the errors.
+    elev, azim, up, dpi
+        Camera and resolution (see :func:`meshcorr.viz.render.render_panels`).
+    map_name : str
+        How error messages refer to the map (e.g. its file name).
+
+    Returns
+    -------
+    info : dict
+        ``"mean_error"`` and ``"max_error"`` (sqrt-area normalised) when
+        ``truth`` is given, else empty.
+
+    Raises
+    ------
+    ParameterError
+        If a map does not fit the meshes, or ``error`` is set without ``truth``.
+    """
+    (V1, F1), (V2, F2) = source, target
+    mapping = check_map(mapping, len(V1), len(V2), name=map_name)
+    if truth is not None:
+        truth = check_map(truth, len(V1), len(V2), name="the ground truth")
+    elif error:
+        raise ParameterError("The error picture needs the ground-truth map: give --gt GT.")
+    target_colors = mesh_coloring(coloring, V2, F2)
+    n_mapped = int((mapping >= 0).sum())
+    target_panel = Panel(V2, F2, target_colors, f"target ({len(V2)} vertices), coloured by {coloring}")
+    info: dict = {}
+    if truth is not None:
+        errors = correspondence_errors(target, mapping, truth, geodesic=geodesic)
+        if np.isfinite(errors).any():
+            info = {"mean_error": float(np.nanmean(errors)), "max_error": float(np.nanmax(errors))}
+    if error:
+        vmax = info.get("max_error", 0.0) or 1.0
+        source_panel = Panel(
+            V1, F1, scalar_colors(errors, "error", vmin=0.0, vmax=vmax),
+            f"source: geodesic error (mean {info.get('mean_error', float('nan')):.3f})",
+            colorbar={"cmap": "error", "vmin": 0.0, "vmax": vmax, "label": "error / sqrt(area)"},
+        )
+        panels = [source_panel, target_panel]
+    else:
+        mapped_colors = pull_back(target_colors, mapping, fill=UNMAPPED_COLOR)
+        panels = [Panel(V1, F1, mapped_colors,
+                        f"source through the map ({n_mapped}/{len(V1)} mapped)"), target_panel]
+        if truth is not None:
+            true_colors = pull_back(target_colors, truth, fill=UNMAPPED_COLOR)
+            panels += [Panel(V1, F1, true_colors, "source through the ground truth"), target_panel]
+    footer = None
+    if info:
+        footer = f"geodesic error / sqrt(area): mean {info['mean_error']:.4f}, max {info['max_error']:.4f}"
+    render_panels(panels, path, ncols=2, elev=elev, azim=azim, up=up, dpi=dpi, footer=footer)
+    return info
+
+
+def affinity_eigenpairs(vertices, faces, k: int, *, geodesic: str = "heat",
+                        random_state: int | None = 0) -> tuple[np.ndarray, np.ndarray]:
+    """Top ``k`` eigenpairs of a mesh's Gaussian geodesic affinity matrix.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+    faces : (m, 3) int
+    k : int
+    geodesic : str
+    random_state : int or None
+
+    Returns
+    -------
+    eigenvalues : (k,) float
+        Descending.
+    eigenvectors : (n, k) float
+        Unit columns, signs by :func:`meshcorr.embedding.sign_convention`.
+    """
+    mesh = as_mesh((vertices, faces), name="mesh", min_vertices=k + 2,
+                   reason=f"{k} eigenvectors need at least {k + 2} vertices.")
+    D = np.array(mesh.geodesic_matrix(geodesic))
+    return top_eigenpairs(gaussian_affinity(D, overwrite=True), k, random_state=random_state)
+
+
+def spectrum_figure(vertices, faces, path, *, n_eigenvectors: int = 6, geodesic: str = "heat",
+                    scale: bool = True, random_state: int | None = 0, elev: float = 30.0,
+                    azim: float = -60.0, up: str = "z", dpi: int = 100) -> np.ndarray:
+    """Eigenvectors and spectral embedding of a mesh, written as a PNG.
+
+    The first panel is the mesh coloured by part; the second is the 3-D
+    spectral embedding drawn as a mesh (each vertex moved to
+    ``(u_2, u_3, u_4)``, scaled by ``sqrt(lambda)`` when ``scale``; same
+    faces and colours; the paper's Figure 2). The following panels show
+    eigenvectors ``u_1 .. u_n`` of the Gaussian affinity matrix (blue
+    negative, red positive, white 0) with their eigenvalues (Figure 6); the
+    first 8 eigenvalues are listed under the grid.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float
+    faces : (m, 3) int
+    path : str or path-like
+        The PNG file.
+    n_eigenvectors : int
+        Eigenvectors drawn (>= 1).
+    geodesic : str
+        Geodesic solver.
+    scale : bool
+        Scale the embedding by sqrt(eigenvalue), as the matcher does.
+    random_state : int or None
+        Seed of the eigensolver's start vector.
+    elev, azim, up, dpi
+        Camera and resolution (see :func:`meshcorr.viz.render.render_panels`).
+
+    Returns
+    -------
+    eigenvalues : (max(n_eigenvectors, 8),) float
+        Descending.
+    """
+    n_eigenvectors = check_int("n_eigenvectors", n_eigenvectors, minimum=1, maximum=30)
+    vertices = np.asarray(vertices, dtype=np.float64)
+    faces = np.asarray(faces, dtype=np.int64)
+    k = max(n_eigenvectors, 8)
+    values, vectors = affinity_eigenpairs(vertices, faces, k, geodesic=geodesic,
+                                          random_state=random_state)
+    colors = mesh_coloring("parts", vertices, faces)
+    embedding = vectors[:, 1:4]
+    if scale:
+        embedding = embedding * np.sqrt(np.clip(values[1:4], 0.0, None))
+    panels = [Panel(vertices, faces, colors, f"mesh ({len(vertices)} vertices)"),
+              Panel(embedding, faces, colors, "spectral embedding (u2, u3, u4)")]
+    for j in range(n_eigenvectors):
+        u = vectors[:, j]
+        bound = float(np.abs(u).max()) or 1.0
+        panels.append(Panel(vertices, faces, scalar_colors(u, "coolwarm", vmin=-bound, vmax=bound),
+                            f"u{j + 1}, \N{GREEK SMALL LETTER LAMDA} = {values[j]:.4g}"))
+    listed = ", ".join(f"{v:.4g}" for v in values[:8])
+    render_panels(panels, path, ncols=4, elev=elev, azim=azim, up=up, dpi=dpi,
+                  panel_size=(3.2, 2.8), footer=f"eigenvalues \N{GREEK SMALL LETTER LAMDA}1..8: {listed}")
+    return values

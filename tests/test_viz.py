@@ -1,0 +1,169 @@
+"""Pictures (`meshcorr show`, `meshcorr embed`) and attribute transfer (`meshcorr transfer`)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+pytest.importorskip("matplotlib")
+
+from meshcorr import datasets  # noqa: E402
+from meshcorr.cli import main  # noqa: E402
+from meshcorr.errors import ParameterError  # noqa: E402
+from meshcorr.io import write_map, write_mesh  # noqa: E402
+from meshcorr.transfer import check_map, pull_back  # noqa: E402
+from meshcorr.viz.colors import part_colors, scalar_colors  # noqa: E402
+
+
+def _read_png(path) -> np.ndarray:
+    from matplotlib.image import imread
+
+    return imread(str(path))[:, :, :3]
+
+
+def _ink(image: np.ndarray) -> float:
+    """Fraction of pixels that are not (near) white background."""
+    return float((image.min(axis=2) < 0.9).mean())
+
+
+@pytest.fixture(scope="module")
+def pair(tmp_path_factory):
+    """A small bent/straight tube pair with its true map, as files."""
+    folder = tmp_path_factory.mktemp("viz")
+    source = datasets.tube(n_along=14, n_around=8, bend=0.0)
+    target = datasets.tube(n_along=14, n_around=8, bend=1.5)
+    truth = datasets.ground_truth(source, target)
+    paths = {"source": folder / "source.off", "target": folder / "target.off",
+             "map": folder / "map.txt", "gt": folder / "gt.txt", "folder": folder}
+    write_mesh(paths["source"], source.vertices, source.faces)
+    write_mesh(paths["target"], target.vertices, target.faces)
+    write_map(paths["map"], truth)
+    write_map(paths["gt"], truth)
+    paths.update(n_source=len(source.vertices), n_target=len(target.vertices),
+                 target_shape=target, truth=truth)
+    return paths
+
+
+def _args(pair, *extra):
+    return [str(pair["source"]), str(pair["target"]), str(pair["map"]), *map(str, extra)]
+
+
+def test_show_draws_both_meshes(pair, tmp_path):
+    out = tmp_path / "show.png"
+    assert main(["show", *_args(pair, "-o", out)]) == 0
+    image = _read_png(out)
+    half = image.shape[1] // 2
+    # Each half holds a mesh: a good share of coloured pixels, and several colours (parts).
+    for part in (image[:, :half], image[:, half:]):
+        assert _ink(part) > 0.05
+        assert len(np.unique(np.round(part.reshape(-1, 3) * 8), axis=0)) > 20
+
+
+def test_show_with_truth_adds_a_row_and_error_mode(pair, tmp_path, capsys):
+    one = tmp_path / "one.png"
+    two = tmp_path / "two.png"
+    err = tmp_path / "err.png"
+    assert main(["show", *_args(pair, "-o", one)]) == 0
+    assert main(["show", *_args(pair, "-o", two, "--gt", pair["gt"])]) == 0
+    assert "mean 0.0000" in capsys.readouterr().out  # the map is the truth
+    assert _read_png(two).shape[0] > 1.7 * _read_png(one).shape[0]
+    bottom = _read_png(two)[_read_png(two).shape[0] // 2:]
+    assert _ink(bottom[:, : bottom.shape[1] // 2]) > 0.05
+    assert main(["show", *_args(pair, "-o", err, "--gt", pair["gt"], "--error")]) == 0
+    assert _ink(_read_png(err)) > 0.05
+
+
+def test_show_errors_are_one_line(pair, tmp_path, capsys):
+    short = tmp_path / "short.txt"
+    write_map(short, np.zeros(pair["n_source"] - 1, dtype=int))
+    far = tmp_path / "far.txt"
+    write_map(far, np.full(pair["n_source"], pair["n_target"]))
+    cases = [
+        ([str(pair["source"]), str(pair["target"]), str(short), "-o", str(tmp_path / "a.png")],
+         "entries but the source mesh has"),
+        ([str(pair["source"]), str(pair["target"]), str(far), "-o", str(tmp_path / "b.png")],
+         "outside the target's vertex range"),
+        (_args(pair, "-o", tmp_path / "missing" / "c.png"), "does not exist"),
+        (_args(pair, "-o", tmp_path / "d.png", "--error"), "--gt"),
+    ]
+    for argv, message in cases:
+        assert main(["show", *argv]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("meshcorr: error:") and message in err and "Traceback" not in err
+        assert err.count("\n") == 1
+    assert not list(tmp_path.glob("*.png"))
+
+
+def test_pull_back_and_check_map():
+    values = np.array([[1, 2, 3], [4, 5, 6], [7, 8, 9]], dtype=np.uint8)
+    pulled = pull_back(values, np.array([2, -1, 0]), fill=np.array([0, 0, 0], dtype=np.uint8))
+    np.testing.assert_array_equal(pulled, [[7, 8, 9], [0, 0, 0], [1, 2, 3]])
+    assert np.isnan(pull_back(np.array([1.0, 2.0]), np.array([-1, 1]))[0])
+    with pytest.raises(ParameterError, match="1-D array of integer"):
+        check_map(np.zeros(3), 3, 3)
+    with pytest.raises(ParameterError, match="outside"):
+        check_map(np.array([0, -2, 1]), 3, 3)
+
+
+def test_colorings_are_valid():
+    shape = datasets.tube(n_along=10, n_around=6)
+    colors = part_colors(shape.vertices, shape.faces, n_parts=4)
+    assert colors.shape == (len(shape.vertices), 3) and colors.dtype == np.uint8
+    assert len(np.unique(colors, axis=0)) > 10  # smooth: many blended colours
+    ends = scalar_colors(np.array([0.0, 1.0, np.nan]), "viridis")
+    np.testing.assert_array_equal(ends, [[68, 1, 84], [253, 231, 37], [170, 170, 170]])
+
+
+def _ply_colors(path) -> np.ndarray:
+    import trimesh
+
+    mesh = trimesh.load(path, process=False, force="mesh")
+    return np.asarray(mesh.visual.vertex_colors)[:, :3]
+
+
+def test_transfer_colours_follow_the_map(pair, tmp_path):
+    rng = np.random.default_rng(0)
+    target = pair["target_shape"]
+    colors = rng.integers(0, 256, size=(pair["n_target"], 3))
+    mapping = rng.integers(0, pair["n_target"], size=pair["n_source"])
+    mapping[:3] = -1
+    map_file, color_file = tmp_path / "m.txt", tmp_path / "c.txt"
+    write_map(map_file, mapping)
+    np.savetxt(color_file, colors, fmt="%d")
+    coloured_target = tmp_path / "t.ply"
+    write_mesh(coloured_target, target.vertices, target.faces, vertex_colors=colors.astype(np.uint8))
+    for attribute in (str(color_file), "colors"):
+        out = tmp_path / "out.ply"
+        assert main(["transfer", str(pair["source"]), str(coloured_target), str(map_file),
+                     "--attribute", attribute, "-o", str(out)]) == 0
+        got = _ply_colors(out)
+        np.testing.assert_array_equal(got[3:], colors[mapping[3:]])
+        np.testing.assert_array_equal(got[:3], np.full((3, 3), 170))
+
+
+def test_transfer_scalar_field(pair, tmp_path):
+    field = np.linspace(0.0, 1.0, pair["n_target"])
+    field_file, values_out, out = tmp_path / "f.npy", tmp_path / "v.npy", tmp_path / "s.ply"
+    np.save(field_file, field)
+    assert main(["transfer", *_args(pair, "--attribute", field_file, "-o", out,
+                                    "--values-out", values_out)]) == 0
+    np.testing.assert_allclose(np.load(values_out), field[pair["truth"]], atol=0)
+    got = _ply_colors(out)
+    np.testing.assert_array_equal(got, scalar_colors(field[pair["truth"]], vmin=0.0, vmax=1.0))
+
+
+def test_transfer_errors_are_one_line(pair, tmp_path, capsys):
+    wrong = tmp_path / "wrong.txt"
+    np.savetxt(wrong, np.zeros(pair["n_target"] + 1))
+    cases = [
+        (_args(pair, "--attribute", wrong, "-o", tmp_path / "a.ply"), "one row per target vertex"),
+        (_args(pair, "--attribute", tmp_path / "nope.txt", "-o", tmp_path / "b.ply"), "no such file"),
+        (_args(pair, "--attribute", "colors", "-o", tmp_path / "c.ply"), "no per-vertex colours"),
+        (_args(pair, "--attribute", "parts", "-o", tmp_path / "d.off"), ".ply or .obj"),
+        (_args(pair, "--attribute", "xyz", "-o", tmp_path / "no" / "e.ply"), "does not exist"),
+    ]
+    for argv, message in cases:
+        assert main(["transfer", *argv]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("meshcorr: error:") and message in err, err
+    assert not list(tmp_path.glob("*.ply"))

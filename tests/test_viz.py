@@ -167,3 +167,23 @@ def test_transfer_errors_are_one_line(pair, tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.startswith("meshcorr: error:") and message in err, err
     assert not list(tmp_path.glob("*.ply"))
+
+
+def test_embed_draws_eigenvectors(pair, tmp_path, capsys):
+    out = tmp_path / "embed.png"
+    assert main(["embed", str(pair["source"]), "-o", str(out), "-n", "2"]) == 0
+    line = capsys.readouterr().out
+    values = [float(v) for v in line.split("eigenvalues:")[1].split(",")]
+    assert len(values) == 2 and values[0] >= values[1] > 0
+    image = _read_png(out)
+    quarter = image.shape[1] // 4
+    # Four panels (mesh, embedding, u1, u2) in one row, each drawn.
+    for column in range(4):
+        assert _ink(image[:, column * quarter:(column + 1) * quarter]) > 0.03
+
+
+def test_embed_errors_are_one_line(pair, tmp_path, capsys):
+    assert main(["embed", str(pair["source"]), "-o", str(tmp_path / "a.png"), "-n", "0"]) == 2
+    assert "n_eigenvectors" in capsys.readouterr().err
+    assert main(["embed", str(tmp_path / "none.off"), "-o", str(tmp_path / "b.png")]) == 2
+    assert capsys.readouterr().err.startswith("meshcorr: error:")

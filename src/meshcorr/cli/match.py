@@ -99,6 +99,12 @@ def add_parser(sub) -> None:
     o.add_argument("--alternative-out", metavar="MAP",
                    help="also write the alternative map (usually the left/right mirror image of MAP)")
     o.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    o.add_argument("--report", metavar="REPORT.html",
+                   help="also write a self-contained HTML report: linked rotatable 3-D views coloured "
+                        "by the correspondence, stage timings, eigenvector configuration")
+    o.add_argument("--gt", nargs="+", metavar="GT",
+                   help="ground truth for the report's error curve ('identity', SOURCE.vts "
+                        "TARGET.vts, or a file of 0-based pairs)")
     p.set_defaults(run=run)
 
 
@@ -120,6 +126,11 @@ def run(args) -> int:
     check_output_path(args.output)
     if args.alternative_out:
         check_output_path(args.alternative_out)
+    if args.report:
+        check_output_path(args.report)
+    elif args.gt:
+        raise ParameterError("--gt is used by the HTML report only: add --report REPORT.html "
+                             "(or score the map with 'meshcorr evaluate').")
     progress = None if args.quiet else StageProgress(sys.stderr)
     result = match(args.source, args.target, symmetry=args.symmetry, refine=args.refine,
                    anchor_scale=args.anchor_scale, k=args.k, geodesic=args.geodesic,
@@ -137,6 +148,8 @@ def run(args) -> int:
         write_map(args.alternative_out, result.alternative_map)
     summary = result.summary()
     summary.update(source=args.source, target=args.target, output=args.output)
+    if args.report:
+        _write_report(args, result.map, summary)
     if args.json:
         json.dump(summary, sys.stdout, indent=2)
         sys.stdout.write("\n")
@@ -145,3 +158,27 @@ def run(args) -> int:
         print(f"meshcorr: wrote {args.output}: {summary['n_mapped']} source vertices mapped onto "
               f"{summary['n_target_hit']} target vertices in {total:.1f} s", file=sys.stderr)
     return 0
+
+
+def _write_report(args, mapping, summary: dict) -> None:
+    """The HTML report of ``--report``, with the error curve when ``--gt`` is given."""
+    import numpy as np
+
+    from ..evaluation import geodesic_errors
+    from ..ground_truth import load_ground_truth
+    from ..io import read_mesh
+    from ..viz.report import write_report
+
+    source = read_mesh(args.source, name=args.source)
+    target = read_mesh(args.target, name=args.target)
+    errors = None
+    if args.gt:
+        truth = load_ground_truth(args.gt, n_source=len(source[0]), n_target=len(target[0]))
+        predicted = mapping[truth.source]
+        errors = np.full(len(truth.source), np.nan)
+        mapped = predicted >= 0
+        if mapped.any():
+            errors[mapped] = geodesic_errors(target, predicted[mapped], truth.target[mapped],
+                                             method=args.geodesic)
+    write_report(args.report, source, target, mapping, summary, errors=errors,
+                 title=f"meshcorr: {args.source} -> {args.target}")

@@ -134,11 +134,14 @@ def _draw_panel(fig, ax, panel: Panel, frame: np.ndarray) -> None:
     ax.set_axis_off()
     if panel.title:
         ax.set_title(panel.title, fontsize=10)
-    if panel.colorbar:
+
+
+def _draw_colorbar(fig, ax, bar: dict | None) -> None:
+    """A horizontal colour bar under ``ax`` (added after the layout, which it would upset)."""
+    if bar:
         from matplotlib.cm import ScalarMappable
         from matplotlib.colors import LinearSegmentedColormap, Normalize
 
-        bar = panel.colorbar
         stops = np.asarray(COLORMAPS[bar["cmap"]], dtype=np.float64) / 255.0
         cmap = LinearSegmentedColormap.from_list(bar["cmap"], stops)
         mappable = ScalarMappable(norm=Normalize(bar["vmin"], bar["vmax"]), cmap=cmap)
@@ -188,16 +191,18 @@ def render_panels(panels: list[Panel], path, *, ncols: int = 2, elev: float = 30
     nrows = -(-len(panels) // ncols)
     width, height = panel_size
     extra = (0.35 if title else 0.0) + (0.35 if footer else 0.0)
-    fig = Figure(figsize=(width * ncols, height * nrows + extra), dpi=dpi, facecolor="white")
+    # Constrained layout makes room for titles, colour bars and the footer.
+    fig = Figure(figsize=(width * ncols, height * nrows + extra), dpi=dpi, facecolor="white",
+                 layout="constrained")
     FigureCanvasAgg(fig)
+    axes = []
     for number, panel in enumerate(panels):
-        ax = fig.add_subplot(nrows, ncols, number + 1)
-        _draw_panel(fig, ax, panel, frame)
+        axes.append(fig.add_subplot(nrows, ncols, number + 1))
+        _draw_panel(fig, axes[-1], panel, frame)
     if title:
         fig.suptitle(title, fontsize=11)
     if footer:
-        fig.text(0.5, 0.01, footer, ha="center", va="bottom", fontsize=8, family="monospace")
-    top = 1.0 - (0.35 / fig.get_figheight() if title else 0.0)
-    bottom = 0.35 / fig.get_figheight() if footer else 0.0
-    fig.tight_layout(rect=(0.0, bottom, 1.0, top), pad=0.6)
+        fig.supxlabel(footer, fontsize=8, family="monospace")
+    for ax, panel in zip(axes, panels):
+        _draw_colorbar(fig, ax, panel.colorbar)
     atomic_write(path, lambda file: fig.savefig(file, format="png", dpi=dpi, facecolor="white"))

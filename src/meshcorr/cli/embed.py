@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ..geodesics import GEODESIC_METHODS
+from .show import add_camera_arguments
 
 HELP = "draw a mesh's affinity eigenvectors and its 3-D spectral embedding as a PNG"
 
@@ -31,11 +32,7 @@ def add_parser(sub) -> None:
     p.add_argument("--no-scale", dest="scale", action="store_false",
                    help="draw the embedding without scaling by sqrt(eigenvalue)")
     p.add_argument("--seed", type=int, default=0, help="random state of the eigensolver (default 0)")
-    p.add_argument("--elev", type=float, default=30.0, help="camera elevation, degrees (default 30)")
-    p.add_argument("--azim", type=float, default=-60.0, help="camera azimuth, degrees (default -60)")
-    p.add_argument("--up", choices=("x", "y", "z"), default="z",
-                   help="world axis drawn pointing up (default: z)")
-    p.add_argument("--dpi", type=int, default=100, help="resolution (default 100)")
+    add_camera_arguments(p)
     p.set_defaults(run=run)
 
 

@@ -37,12 +37,17 @@ def add_parser(sub) -> None:
                    help="colouring of TARGET (default: parts)")
     p.add_argument("--geodesic", choices=GEODESIC_METHODS, default="heat",
                    help="geodesic solver for --error (default: heat)")
+    add_camera_arguments(p)
+    p.set_defaults(run=run)
+
+
+def add_camera_arguments(p) -> None:
+    """The picture options shared by ``show`` and ``embed``: camera and resolution."""
     p.add_argument("--elev", type=float, default=30.0, help="camera elevation, degrees (default 30)")
     p.add_argument("--azim", type=float, default=-60.0, help="camera azimuth, degrees (default -60)")
     p.add_argument("--up", choices=("x", "y", "z"), default="z",
                    help="world axis drawn pointing up (default: z)")
     p.add_argument("--dpi", type=int, default=100, help="resolution (default 100)")
-    p.set_defaults(run=run)
 
 
 def dense_truth(spec, n_source: int, n_target: int) -> np.ndarray:

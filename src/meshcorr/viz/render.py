@@ -55,14 +55,12 @@ class Panel:
 
 
 def _require_matplotlib():
-    try:
-        from matplotlib.backends.backend_agg import FigureCanvasAgg
-        from matplotlib.figure import Figure
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise ParameterError(
-            "Pictures need the optional package matplotlib. Install it with "
-            "`pip install meshcorr[plot]` (or `pip install matplotlib`)."
-        ) from exc
+    from ..plots import require_matplotlib
+
+    require_matplotlib()  # a clear ParameterError when matplotlib is missing
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     return Figure, FigureCanvasAgg
 
 

@@ -39,6 +39,7 @@
     var faceColor = new Array(m);
     var view = { canvas: canvas, matrix: null, drawn: 0 };
     view.draw = function () {
+      var started = performance.now();
       var ctx = canvas.getContext("2d");
       var w = canvas.width, h = canvas.height;
       var s = 0.46 * Math.min(w, h) / radius;
@@ -81,6 +82,8 @@
       }
       view.matrix = R.slice();
       view.drawn += 1;
+      view.ms = performance.now() - started;
+      canvas.dataset.drawMs = view.ms.toFixed(1);
     };
     return view;
   }

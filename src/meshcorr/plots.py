@@ -39,7 +39,8 @@ def _save(fig, path, dpi: int) -> None:
 
 def plot_lines(path, series: Mapping[str, tuple[Sequence[float], Sequence[float]]], *,
                xlabel: str, ylabel: str, title: str = "", styles: Mapping[str, str] | None = None,
-               ylim: tuple[float, float] | None = None, markers: bool = False, dpi: int = 90) -> None:
+               ylim: tuple[float, float] | None = None, markers: bool = False,
+               colors: Mapping[str, str] | None = None, dpi: int = 90) -> None:
     """Draw one line per series and save the figure as a PNG (atomically).
 
     Parameters
@@ -49,6 +50,8 @@ def plot_lines(path, series: Mapping[str, tuple[Sequence[float], Sequence[float]
     series : mapping label -> (x (t,) float, y (t,) float)
     xlabel, ylabel, title : str
     styles : mapping label -> matplotlib line style, optional
+    colors : mapping label -> matplotlib colour, optional
+        E.g. one colour per method for its solid and dashed variants.
     ylim : (float, float), optional
     markers : bool
         Mark the data points.
@@ -62,7 +65,7 @@ def plot_lines(path, series: Mapping[str, tuple[Sequence[float], Sequence[float]
     try:
         for label, (x, y) in series.items():
             ax.plot(np.asarray(x), np.asarray(y), (styles or {}).get(label, "-"), label=label,
-                    marker="o" if markers else None, markersize=3)
+                    color=(colors or {}).get(label), marker="o" if markers else None, markersize=3)
         ax.set_xlabel(xlabel)
         ax.set_ylabel(ylabel)
         if title:
@@ -77,7 +80,8 @@ def plot_lines(path, series: Mapping[str, tuple[Sequence[float], Sequence[float]
 
 
 def plot_cumulative_curves(path, curves: Mapping[str, tuple[np.ndarray, np.ndarray]], *,
-                           title: str = "", styles: Mapping[str, str] | None = None) -> None:
+                           title: str = "", styles: Mapping[str, str] | None = None,
+                           colors: Mapping[str, str] | None = None) -> None:
     """Cumulative geodesic-error curves (Princeton protocol) as a PNG.
 
     Parameters
@@ -87,6 +91,7 @@ def plot_cumulative_curves(path, curves: Mapping[str, tuple[np.ndarray, np.ndarr
         E.g. from :func:`meshcorr.evaluation.cumulative_curve`.
     title : str
     styles : mapping label -> line style, optional
+    colors : mapping label -> colour, optional
     """
     plot_lines(path, curves, xlabel="geodesic error / sqrt(area)", ylabel="fraction of points",
-               title=title, styles=styles, ylim=(0.0, 1.0))
+               title=title, styles=styles, colors=colors, ylim=(0.0, 1.0))

@@ -128,7 +128,9 @@ def run(args) -> int:
         from ..plots import plot_cumulative_curves
 
         styles = {label: "--" if label.endswith("(flips forgiven)") else "-" for label in curves}
-        plot_cumulative_curves(Path(args.out) / "curves.png", curves, styles=styles,
+        colour = {m: f"C{i}" for i, m in enumerate(e["method"] for e in table)}
+        colors = {label: colour.get(label.split(" ")[0]) for label in curves}
+        plot_cumulative_curves(Path(args.out) / "curves.png", curves, styles=styles, colors=colors,
                                title=f"{len({(r['source'], r['target']) for r in rows})} pairs")
     sys.stdout.write(md.read_text())
     failed = sum(e["failed"] for e in table)

@@ -30,7 +30,7 @@ from .errors import MeshcorrError, ParameterError
 from .evaluation import THRESHOLDS, GeodesicCache, cumulative_curve, evaluate_map
 from .ground_truth import load_ground_truth
 from .io import atomic_write
-from .mesh import as_mesh
+from .mesh import Mesh, as_mesh
 
 __all__ = ["METHODS", "Dataset", "FIELDS", "load_dataset", "read_rows", "run_benchmark",
            "run_method", "stratified_sample", "summarize", "write_summary"]
@@ -310,7 +310,8 @@ def run_benchmark(dataset_dir, methods: Sequence[str], out_dir, *, n_pairs: int 
             try:
                 if load_error is not None:
                     raise _PairError(load_error)
-                result = run_method(method, source, target, random_state=random_state,
+                # fresh Mesh objects: no method may reuse geodesics another one cached on them
+                result = run_method(method, _fresh(source), _fresh(target), random_state=random_state,
                                     **method_options.get(method, {}))
                 row["seconds"] = time.perf_counter() - start
                 start = time.perf_counter()
@@ -335,6 +336,11 @@ def run_benchmark(dataset_dir, methods: Sequence[str], out_dir, *, n_pairs: int 
                 progress(count, total, f"{label}: {status}")
     wanted = {(s, t, m) for s, t in pairs for m in methods}
     return [r for r in rows if (r["source"], r["target"], r["method"]) in wanted]
+
+
+def _fresh(mesh: Mesh) -> Mesh:
+    """A copy of ``mesh`` with an empty cache, so that each method's time includes its geodesics."""
+    return Mesh(mesh.vertices, mesh.faces, name=mesh.name)
 
 
 class _PairError(Exception):

@@ -20,7 +20,11 @@ symmetric) and its pseudo-inverse square root drops eigenvalues below
 ``rcond`` times the largest: a Gaussian kernel as wide as the shape is
 numerically of low rank, and a Gaussian of geodesic distances need not be
 positive semi-definite, so the tiny and negative eigenvalues of ``W`` carry
-only solver noise that :math:`W^{+}` would amplify.
+only solver noise that :math:`W^{+}` would amplify. Measured on TOSCA cat0
+(5000 vertices, heat geodesics, landmarks by farthest-point sampling) against
+the dense embedding: Procrustes residual 1.4-1.6 % and eigenvalues within
+0.7 % for 50-150 landmarks with ``rcond = 1e-4``; with ``1e-6`` or less the
+residual jumps to 3-30 % for some landmark counts (noise amplified).
 
 The eigenvalues approximate those of the full ``n x n`` matrix (not of
 ``W``), so the eigenvalue-scaled embedding is on the dense embedding's scale.
@@ -131,8 +135,8 @@ def landmark_spectrum(mesh: Mesh, *, k: int, geodesic: str, scale: bool, n_landm
     -------
     spectrum : Spectrum
         ``geodesics_from(i)`` runs one single-source solve on the solver
-        built once for this mesh (rows of landmarks and earlier queries are
-        cached).
+        built once for this mesh; rows of landmarks and of earlier queries
+        are cached (``n`` floats each; the pipeline asks for a few dozen).
     """
     n = mesh.n_vertices
     with timer.stage("geodesics"):

@@ -73,6 +73,32 @@ def test_show_with_truth_adds_a_row_and_error_mode(pair, tmp_path, capsys):
     assert _ink(_read_png(err)) > 0.05
 
 
+def test_error_mode_colours_follow_the_error(pair, tmp_path):
+    # Error colours run from blue (0) to red (largest), every level a different colour.
+    ramp = scalar_colors(np.linspace(0.0, 1.0, 11), "error").astype(int)
+    assert np.all(ramp[:4, 2] > ramp[:4, 0] + 50) and np.all(ramp[-4:, 0] > ramp[-4:, 2] + 100)
+    assert len(np.unique(ramp, axis=0)) == 11
+    # A map right on one end of the tube and sent far away on the other end.
+    truth = pair["truth"]
+    params = pair["target_shape"].params
+    wrong = truth.copy()
+    far_end = int(np.argmax(params[:, 0]))
+    near = datasets.tube(n_along=14, n_around=8, bend=0.0).params[:, 0] < 0.5
+    wrong[near] = far_end
+    bad = tmp_path / "bad.txt"
+    write_map(bad, wrong)
+    out = tmp_path / "err.png"
+    argv = [str(pair["source"]), str(pair["target"]), str(bad), "-o", str(out),
+            "--gt", str(pair["gt"]), "--error"]
+    assert main(["show", *argv]) == 0
+    image = _read_png(out)
+    source_half = image[: int(0.85 * image.shape[0]), : image.shape[1] // 2]  # above the colour bar
+    drawn = source_half.min(axis=2) < 0.9
+    red = drawn & (source_half[:, :, 0] > source_half[:, :, 2] + 0.15)
+    blue = drawn & (source_half[:, :, 2] > source_half[:, :, 0] + 0.15)
+    assert red.mean() > 0.01 and blue.mean() > 0.01, (red.mean(), blue.mean())
+
+
 def test_show_errors_are_one_line(pair, tmp_path, capsys):
     short = tmp_path / "short.txt"
     write_map(short, np.zeros(pair["n_source"] - 1, dtype=int))
@@ -158,6 +184,8 @@ def test_transfer_errors_are_one_line(pair, tmp_path, capsys):
     cases = [
         (_args(pair, "--attribute", wrong, "-o", tmp_path / "a.ply"), "one row per target vertex"),
         (_args(pair, "--attribute", tmp_path / "nope.txt", "-o", tmp_path / "b.ply"), "no such file"),
+        (_args(pair, "--attribute", "foo", "-o", tmp_path / "b.ply"), "not a known attribute"),
+        (_args(pair, "--attribute", tmp_path, "-o", tmp_path / "b.ply"), "cannot be read"),
         (_args(pair, "--attribute", "colors", "-o", tmp_path / "c.ply"), "no per-vertex colours"),
         (_args(pair, "--attribute", "parts", "-o", tmp_path / "d.off"), ".ply or .obj"),
         (_args(pair, "--attribute", "xyz", "-o", tmp_path / "no" / "e.ply"), "does not exist"),

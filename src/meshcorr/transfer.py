@@ -142,8 +142,11 @@ def read_attribute(spec: str, target_path, vertices, faces) -> np.ndarray:
         values = np.load(spec) if str(spec).endswith(".npy") else np.loadtxt(spec, ndmin=1)
     except FileNotFoundError as exc:
         raise ParameterError(
-            f"--attribute {spec}: no such file; give 'colors', 'parts', 'xyz' or a per-vertex file."
+            f"--attribute {spec}: not a known attribute and no such file; give 'colors', 'parts', "
+            "'xyz' or a file with one row per target vertex (.npy or text)."
         ) from exc
+    except OSError as exc:  # a folder, no permission, ...
+        raise ParameterError(f"--attribute {spec}: cannot be read ({exc.strerror or exc}).") from exc
     except ValueError as exc:
         raise ParameterError(f"--attribute {spec}: not a numeric table ({exc}).") from exc
     values = np.asarray(values)

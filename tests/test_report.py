@@ -55,6 +55,10 @@ def test_report_is_self_contained_and_complete(shape):
     for text in ("geodesics", "2.000", "runner-up", "1 3 2", "+ - +", "0.0125", "48 configurations",
                  'id="error-curve"', "50.0 % within 0.05"):
         assert text in page, text
+    assert "not the cheapest" not in page  # the chosen configuration is the cheaper one here
+    mirror = dict(SUMMARY, configuration=SUMMARY["runner_up"], runner_up=SUMMARY["configuration"],
+                  params={"symmetry": "auto"})
+    assert "not the cheapest: the symmetry rule (auto)" in report_html((V, F), (V, F), mapping, mirror)
 
 
 def test_report_thins_large_meshes_and_checks_the_map(shape):

@@ -85,7 +85,7 @@ def _configuration_rows(summary: dict) -> list[list]:
 
 def _curve_svg(thresholds, fractions, width: int = 420, height: int = 260) -> str:
     """Cumulative error curve as an inline SVG polyline with labelled axes."""
-    left, bottom, right, top = 46, 36, 10, 10
+    left, bottom, right, top = 46, 36, 22, 10  # room for the last tick label
     w, h = width - left - right, height - top - bottom
     xmax = float(thresholds[-1]) or 1.0
     points = " ".join(f"{left + w * t / xmax:.1f},{top + h * (1 - f):.1f}"
@@ -188,6 +188,13 @@ def report_html(source, target, mapping, summary: dict, *, errors=None, coloring
                   "perm[c], times sign[c] (1-based, excluding the constant first one); cost: mean "
                   "nearest-neighbour distance between the embeddings.</p>",
                   _table(config_rows, ["", "perm", "signs", "cost"])]
+        chosen, runner_up = summary.get("configuration"), summary.get("runner_up")
+        if chosen and runner_up and chosen["cost"] > runner_up["cost"]:
+            rule = html.escape(str((summary.get("params") or {}).get("symmetry", "")))
+            parts.append('<p class="note">The chosen configuration is not the cheapest: the '
+                         f"symmetry rule{' (' + rule + ')' if rule else ''} picked it among "
+                         "near-tied configurations (often a map and its left/right mirror image; "
+                         "'auto' keeps the orientation-preserving one).</p>")
         if "n_configurations" in summary:
             parts.append(f'<p class="note">{summary["n_configurations"]} configurations ranked.</p>')
     params = summary.get("params") or {}

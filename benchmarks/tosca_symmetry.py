@@ -17,11 +17,8 @@ against the mirrored truth ``.sym.vts`` is smaller than against the truth),
 mean geodesic error with flips counted, mean error over the unflipped pairs,
 and seconds per pair (the map only, not the evaluation).
 
-Work is shared where the result is provably the same: ``default`` is
-``refine_map`` applied to the ``no-refine`` map (what ``match`` does, same
-arguments; checked on the first pair), and ``cost`` reuses ``default`` when
-``auto`` chose the cheapest configuration (same code path, same seed).
-Rows are appended to a CSV as they finish, so an interrupted run resumes.
+``cost`` reuses ``default`` when ``auto`` chose the cheapest configuration
+(same code path, same seed). Rows are appended to a CSV as they finish, so an interrupted run resumes.
 
 Usage::
 
@@ -29,7 +26,7 @@ Usage::
     nice -n 10 python benchmarks/tosca_symmetry.py --anchor-study 8
 
 Needs the TOSCA data beside the repository (``../shared/data/tosca5k``);
-exits with a message when it is absent. pyFM is optional (``--no-pyfm``).
+exits with a message when it is absent. pyFM is optional (``--methods``).
 """
 
 from __future__ import annotations
@@ -85,40 +82,36 @@ def load_pair(dataset, a: str, b: str):
     return source, target, truth, sym
 
 
-def run_pair(dataset, a: str, b: str, *, with_pyfm: bool, check: bool) -> list[dict]:
+def run_pair(dataset, a: str, b: str, *, methods: tuple) -> list[dict]:
     source, target, truth, sym = load_pair(dataset, a, b)
     maps, seconds, info = {}, {}, {}
 
-    start = time.perf_counter()
-    plain = meshcorr.match(source, target, refine=False)
-    seconds["no-refine"] = time.perf_counter() - start
-    maps["no-refine"] = plain.map
-    start = time.perf_counter()
-    maps["default"] = refine_map(source, target, plain.map, k=REFINE_K, random_state=0)[0]
-    seconds["default"] = seconds["no-refine"] + time.perf_counter() - start
-    chosen = next(c for c in plain.candidates if c["chosen"])
-    other = [c for c in plain.candidates if c["alternative"]]
-    for name in ("default", "no-refine"):
-        info[name] = dict(chosen_rank=chosen["rank"], n_candidates=len(plain.candidates),
-                          orientation_chosen=chosen["orientation"],
-                          orientation_alternative=other[0]["orientation"] if other else "")
-    if check:  # the shortcut must equal the real default run
+    def timed(name, run):
         start = time.perf_counter()
-        full = meshcorr.match(source, target)
-        seconds["default"] = time.perf_counter() - start
-        if not np.array_equal(full.map, maps["default"]):
-            raise RuntimeError("refine_map(match(refine=False)) differs from match(): fix the benchmark.")
-    if chosen["rank"] == 0:
-        maps["cost"], seconds["cost"] = maps["default"], seconds["default"]
-    else:
-        start = time.perf_counter()
-        maps["cost"] = meshcorr.match(source, target, symmetry="cost").map
-        seconds["cost"] = time.perf_counter() - start
-    info["cost"] = dict(chosen_rank=0, n_candidates=len(plain.candidates))
-    if with_pyfm:
-        start = time.perf_counter()
-        maps["pyfm"] = pyfm_map(source, target)
-        seconds["pyfm"] = time.perf_counter() - start
+        result = run()
+        seconds[name] = time.perf_counter() - start
+        maps[name] = result if isinstance(result, np.ndarray) else result.map
+        return result
+
+    if "default" in methods or "cost" in methods:
+        result = timed("default", lambda: meshcorr.match(source, target))
+        chosen = next(c for c in result.candidates if c["chosen"])
+        other = [c for c in result.candidates if c["alternative"]]
+        info["default"] = dict(chosen_rank=chosen["rank"], n_candidates=len(result.candidates),
+                               orientation_chosen=chosen["orientation"],
+                               orientation_alternative=other[0]["orientation"] if other else "")
+        if "cost" in methods:
+            if chosen["rank"] == 0:  # "cost" takes rank 0 by the same code path: the same map
+                maps["cost"], seconds["cost"] = maps["default"], seconds["default"]
+            else:
+                timed("cost", lambda: meshcorr.match(source, target, symmetry="cost"))
+            info["cost"] = dict(chosen_rank=0, n_candidates=len(result.candidates))
+        if "default" not in methods:
+            del maps["default"]
+    if "no-refine" in methods:
+        timed("no-refine", lambda: meshcorr.match(source, target, refine=False))
+    if "pyfm" in methods:
+        timed("pyfm", lambda: pyfm_map(source, target))
 
     cache = GeodesicCache("heat")
     rows = []
@@ -190,7 +183,10 @@ def main() -> int:
     parser.add_argument("--pairs", type=int, default=40, help="stratified sample size (default: 40)")
     parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent / "cache" / "symmetry.csv",
                         help="per-pair CSV, appended to and resumed from")
-    parser.add_argument("--no-pyfm", dest="pyfm", action="store_false", help="skip the pyFM baseline")
+    parser.add_argument("--methods", default=",".join(METHODS),
+                        help=f"comma-separated subset of {', '.join(METHODS)} (default: all)")
+    parser.add_argument("--reverse", action="store_true",
+                        help="work through the pairs last first (a second process with its own --out)")
     parser.add_argument("--summary-only", action="store_true", help="print the tables of the CSV and stop")
     parser.add_argument("--anchor-study", type=int, default=0, metavar="N",
                         help="instead: compare anchor-term scalings on a stratified sample of N pairs")
@@ -198,11 +194,15 @@ def main() -> int:
     if not (args.data / "test_pairs.txt").exists():
         print(f"TOSCA data not found at {args.data}; nothing to do.", file=sys.stderr)
         return 0
-    if args.pyfm:
+    methods = tuple(m for m in args.methods.split(",") if m)
+    if set(methods) - set(METHODS):
+        print(f"Unknown methods {sorted(set(methods) - set(METHODS))}; choose from {METHODS}.", file=sys.stderr)
+        return 2
+    if "pyfm" in methods:
         try:
             import pyFM  # noqa: F401
         except ImportError:
-            print("pyFM is not installed (pip install pyfmaps); run with --no-pyfm.", file=sys.stderr)
+            print("pyFM is not installed (pip install pyfmaps); leave it out of --methods.", file=sys.stderr)
             return 1
     dataset = load_dataset(args.data)
     if args.anchor_study:
@@ -216,11 +216,12 @@ def main() -> int:
             rows = list(csv.DictReader(f))
     done = {(r["source"], r["target"]) for r in rows}
     if not args.summary_only:
-        for number, (a, b) in enumerate(pairs, 1):
+        order = list(enumerate(pairs, 1))
+        for number, (a, b) in (order[::-1] if args.reverse else order):
             if (a, b) in done:
                 continue
             start = time.perf_counter()
-            new = run_pair(dataset, a, b, with_pyfm=args.pyfm, check=not rows)
+            new = run_pair(dataset, a, b, methods=methods)
             fresh = not args.out.exists()
             with open(args.out, "a", newline="") as f:
                 writer = csv.DictWriter(f, fieldnames=FIELDS)

@@ -39,7 +39,7 @@ from .tps import mean_pairwise_distance
 #: Laplace-Beltrami basis size of the ZoomOut refinement (see :mod:`meshcorr.refine`).
 REFINE_K = 40
 #: Geodesic rows sampled on the source for the metric distortion of a candidate.
-N_DISTORTION_SOURCES = 32
+N_DISTORTION_SOURCES = 16
 ANCHOR_SCALES = ("embedding", "geodesic")
 
 
@@ -173,7 +173,7 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
     # resolved by the orientation of each candidate's map (meshcorr.symmetry).
     options = dict(icp_iterations=icp_iterations, n_control=n_control, anneal=anneal,
                    n_anchors=n_anchors, anchor_weight=anchor_weight, anchor_scale=anchor_scale,
-                   bijective=bijective, random_state=random_state, refine=refine, refine_k=refine_k)
+                   bijective=bijective, random_state=random_state)
     with timer.stage("symmetry"):
         reliable = mesh_orientation(src).reliable and mesh_orientation(tgt).reliable
     candidates = _score_candidates(src, tgt, spectra, configurations, timer, options)
@@ -235,15 +235,11 @@ def _score_candidates(src: Mesh, tgt: Mesh, spectra, configurations: list[Config
                       timer: StageTimer, options: dict) -> list[Candidate]:
     """Align each near-tied configuration and score its map (orientation, distortion).
 
-    The orientation score uses each candidate's TPS-ICP nearest-neighbour
-    map; the metric distortion the same map after ZoomOut when ``refine``
-    is on: a left/right mirror composed with a front/back confusion (the
-    second, approximate reflection of a person's low-frequency spectrum)
-    preserves orientation, and only shows as extra distortion once the map
-    is refined (measured on TOSCA david1-david10: 0.0218 against 0.0175 for
-    the true map; before refinement 0.0247 against 0.0222 but 0.0212 for a
-    third candidate). Anchors run for the chosen map and its alternative
-    only (:func:`_finish`).
+    The score uses each candidate's TPS-ICP nearest-neighbour map: the
+    anchors and the refinement only run for the chosen map and its
+    alternative (:func:`_finish`). Measuring the distortion after ZoomOut
+    instead was tried on 40 TOSCA pairs: same flip rate (2/40, other
+    pairs), 35 % slower (benchmarks/RESULTS-symmetry.md).
     """
     X, Y = spectra[0].embedding, spectra[1].embedding
     g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
@@ -255,16 +251,11 @@ def _score_candidates(src: Mesh, tgt: Mesh, spectra, configurations: list[Config
         configuration = configurations[rank]
         with timer.stage("icp"):
             icp = _align(X, configuration.apply(Y), **options)
-        measured = icp.matches
-        if options["refine"]:
-            with timer.stage("refine"):
-                measured = refine_map(src, tgt, icp.matches, k=options["refine_k"],
-                                      random_state=options["random_state"])[0]
         with timer.stage("symmetry"):
             candidates.append(Candidate(
                 rank=rank, configuration=configuration,
                 orientation=orientation_score(src, tgt, icp.matches, random_state=options["random_state"]),
-                distortion=metric_distortion(g1, g2, measured, sources, source_rows),
+                distortion=metric_distortion(g1, g2, icp.matches, sources, source_rows),
                 mapping=icp.matches, extra={"icp": icp, "anchors": np.zeros((0, 2), dtype=np.int64),
                                             "cost": None}))
     return candidates

@@ -18,10 +18,7 @@ these apart:
   mesh's largest one: 0 for an isometry. It rejects non-isometric
   confusions (front/back, a wrong eigenvector order) that happen to
   preserve orientation. This is the Gromov-Hausdorff-type criterion of
-  isometric matching (Bronstein, Bronstein & Kimmel, PNAS 2006). The
-  pipeline measures it on each candidate's map after ZoomOut refinement:
-  on the coarse TPS-ICP map a front/back confusion of a person is as
-  little distorted as the true map.
+  isometric matching (Bronstein, Bronstein & Kimmel, PNAS 2006).
 
 :func:`choose` takes the least distorted orientation-preserving candidate
 (``"auto"``), the cheapest configuration (``"cost"``, the paper's choice), or

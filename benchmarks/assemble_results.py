@@ -1,0 +1,39 @@
+"""Assemble benchmarks/RESULTS.md from the per-topic RESULTS-*.md files.
+
+Usage: ``python benchmarks/assemble_results.py``. Each topic file is written by
+the benchmark of that topic (with its commands, machine and date); this page
+concatenates them under one index so every result is in one place.
+"""
+
+from pathlib import Path
+
+HERE = Path(__file__).resolve().parent
+ORDER = ["core", "baselines", "evaluation", "scale", "symmetry", "viz"]
+TITLES = {
+    "core": "Core dense pipeline on TOSCA (issue 2)",
+    "baselines": "The paper's baselines vs spectral (issue 3)",
+    "evaluation": "Evaluation, benchmark and the paper's experiments (issue 3)",
+    "scale": "Scale and speed (issue 5)",
+    "symmetry": "Left/right mirror and refinement (issue 6)",
+    "viz": "Pictures and report (issue 4)",
+}
+
+
+def main() -> None:
+    parts = [p for p in ORDER if (HERE / f"RESULTS-{p}.md").exists()]
+    out = ["# meshcorr benchmark results", "",
+           "Every result below states the command that reproduces it, the machine and the date.",
+           "This page is assembled by `python benchmarks/assemble_results.py` from the topic files:", ""]
+    out += [f"- [{TITLES[p]}](RESULTS-{p}.md)" for p in parts]
+    for p in parts:
+        text = (HERE / f"RESULTS-{p}.md").read_text().strip()
+        lines = text.split("\n")
+        if lines and lines[0].startswith("#"):
+            lines = lines[1:]
+        out += ["", "---", "", f"## {TITLES[p]}", "", *[
+            ("#" + l if l.startswith("#") else l) for l in lines]]
+    (HERE / "RESULTS.md").write_text("\n".join(out) + "\n")
+
+
+if __name__ == "__main__":
+    main()

@@ -27,11 +27,13 @@ from pathlib import Path
 import numpy as np
 
 import meshcorr
+from meshcorr.benchmark import shape_class
 from meshcorr.evaluation import geodesic_errors
+from meshcorr.ground_truth import read_vts
 from meshcorr.mesh import as_mesh
 
 DEFAULT_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tosca5k"
-STAGES = ("geodesics", "embedding", "reorder", "icp", "matching")
+STAGES = ("geodesics", "embedding", "reorder", "symmetry", "icp", "matching", "refine")
 
 
 def first_pair_per_class(pairs_file: Path, classes: list[str] | None) -> list[tuple[str, str]]:
@@ -40,14 +42,10 @@ def first_pair_per_class(pairs_file: Path, classes: list[str] | None) -> list[tu
         parts = line.split()
         if len(parts) != 2:
             continue
-        cls = parts[0].rstrip("0123456789")
+        cls = shape_class(parts[0])
         if (classes is None or cls in classes) and cls not in chosen:
             chosen[cls] = (parts[0], parts[1])
     return list(chosen.values())
-
-
-def load_vts(path: Path) -> np.ndarray:
-    return np.loadtxt(path, dtype=np.int64) - 1
 
 
 def main() -> int:
@@ -66,8 +64,10 @@ def main() -> int:
         start = time.perf_counter()
         result = meshcorr.match(source, target)
         total = time.perf_counter() - start
-        va, vb = load_vts(args.data / "corres" / f"{a}.vts"), load_vts(args.data / "corres" / f"{b}.vts")
-        vb_sym = load_vts(args.data / "corres" / f"{b}.sym.vts")
+        corres = args.data / "corres"
+        va = read_vts(corres / f"{a}.vts", source.n_vertices)
+        vb = read_vts(corres / f"{b}.vts", target.n_vertices)
+        vb_sym = read_vts(corres / f"{b}.sym.vts", target.n_vertices)
         err = geodesic_errors(target, result.map[va], vb).mean()
         err_sym = geodesic_errors(target, result.map[va], vb_sym).mean()
         rows.append((a, b, source.n_vertices, target.n_vertices, err, err_sym, err_sym < err, total,
@@ -78,7 +78,7 @@ def main() -> int:
           f"meshcorr {meshcorr.__version__}, default settings.\n")
     print("| pair | n1 | n2 | mean error | error vs mirrored truth | flipped | seconds | "
           + " | ".join(STAGES) + " |")
-    print("|---" * (8 + len(STAGES)) + "|")
+    print("|---" * (7 + len(STAGES)) + "|")
     for a, b, n1, n2, err, err_sym, flip, total, stages in rows:
         print(f"| {a}-{b} | {n1} | {n2} | {err:.4f} | {err_sym:.4f} | {'yes' if flip else 'no'} | "
               f"{total:.1f} | " + " | ".join(f"{t:.1f}" for t in stages) + " |")

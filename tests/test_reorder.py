@@ -66,3 +66,23 @@ def test_unknown_mode_is_rejected(embeddings):
     X, Y, _, _ = embeddings
     with pytest.raises(ParameterError, match="'reorder' parameter must be one of"):
         rank_configurations(X, Y, "random")
+
+
+def test_brute_force_prescore_equals_kdtree_costs():
+    """The coarse passes' brute-force costs equal one KD-tree query per configuration (issue 5)."""
+    import itertools
+
+    from scipy.spatial import cKDTree
+
+    from meshcorr.reorder import _all_signs, _brute_costs
+
+    rng = np.random.default_rng(3)
+    Xs = rng.normal(size=(40, 5)) * np.array([1.0, 0.7, 0.5, 0.35, 0.25])
+    targets = rng.normal(size=(90, 5)) * np.array([1.0, 0.7, 0.5, 0.35, 0.25])
+    configs = [(p, s) for p in itertools.permutations(range(5)) for s in _all_signs(5)]
+    tree = cKDTree(targets)
+    expected = np.array([configuration_cost(Xs, targets, p, s, tree) for p, s in configs])
+    got = _brute_costs(Xs, targets, configs)
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
+    # A source point equal to a target point has cost 0, not a tiny negative under the root.
+    assert _brute_costs(targets[:3], targets, [(tuple(range(5)), (1,) * 5)])[0] == pytest.approx(0.0, abs=1e-7)

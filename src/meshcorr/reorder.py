@@ -40,6 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
+from threadpoolctl import threadpool_limits
 
 from ._params import check_choice, check_int
 
@@ -121,11 +122,42 @@ def _batched_costs(Xs: np.ndarray, tree: cKDTree, configs: list[tuple[tuple, tup
 _COARSE = (48, 256, 256)
 
 
+#: Squared distances per block of :func:`_brute_costs` (~2 MB of float64: stays in cache).
+_BRUTE_BLOCK = 1 << 18
+
+
+def _brute_costs(Xs: np.ndarray, targets: np.ndarray, configs: list[tuple[tuple, tuple]]) -> np.ndarray:
+    """:func:`_batched_costs` against a small target set, by brute force.
+
+    Nearest-neighbour distances from the expansion
+    :math:`\\lVert q - y \\rVert^2 = \\lVert q \\rVert^2 + \\lVert y \\rVert^2 - 2 q \\cdot y`
+    (a signed permutation keeps :math:`\\lVert q \\rVert = \\lVert x \\rVert`), one matrix
+    product per block of configurations. Hand-written rather than a KD-tree: most
+    configurations put the queries far from the target points, where a KD-tree
+    query visits most of the tree; on TOSCA cat0/cat1 (48 x 256 points, 3840
+    configurations) this is ~3x faster, and equal to ~1e-16.
+    """
+    n = len(Xs)
+    tt = np.einsum("ij,ij->i", targets, targets)
+    xx = np.einsum("ij,ij->i", Xs, Xs)
+    minus_2t = -2.0 * targets.T
+    costs = np.empty(len(configs))
+    chunk = max(1, _BRUTE_BLOCK // max(1, n * len(targets)))
+    with threadpool_limits(limits=1, user_api="blas"):  # small products: threads only add waits
+        for start in range(0, len(configs), chunk):
+            block = configs[start:start + chunk]
+            sq = _configured_queries(Xs, block) @ minus_2t
+            sq += tt
+            nearest = sq.min(axis=1).reshape(len(block), n) + xx
+            costs[start:start + len(block)] = np.sqrt(np.maximum(nearest, 0.0)).mean(axis=1)
+    return costs
+
+
 def _prescore(X, Y, configs, n_source, n_target, n_keep, rng) -> list:
     """The ``n_keep`` configurations of lowest cost on random subsets of both point sets."""
     sample = X[rng.choice(len(X), size=min(n_source, len(X)), replace=False)]
-    small_tree = cKDTree(Y[rng.choice(len(Y), size=min(n_target, len(Y)), replace=False)])
-    rough = _batched_costs(sample, small_tree, configs)
+    targets = Y[rng.choice(len(Y), size=min(n_target, len(Y)), replace=False)]
+    rough = _brute_costs(sample, targets, configs)
     return [configs[i] for i in np.argsort(rough, kind="stable")[:n_keep]]
 
 

@@ -280,3 +280,16 @@ def test_long_index_lists_are_cut_after_five():
     v = np.vstack([TET_V, np.arange(21.0).reshape(7, 3) + 10])
     with pytest.raises(MeshError, match=r"7 vertices used by no face \(vertices 4, 5, 6, 7, 8, \.\.\.\)"):
         validate_mesh(v, TET_F)
+
+
+@pytest.mark.parametrize("n_values", [50, 3_000_000])
+def test_repeated_rows_match_unique_rows_reference(n_values):
+    """The int64-key duplicate test (and its fallback for huge meshes) equals np.unique(axis=0)."""
+    from meshcorr.validate import _repeated_rows
+
+    rng = np.random.default_rng(0)
+    rows = np.sort(rng.integers(0, 50, size=(400, 3)), axis=1) * (n_values // 50)
+    _, first, inverse = np.unique(rows, axis=0, return_index=True, return_inverse=True)
+    expected = first[inverse.ravel()] != np.arange(len(rows))
+    assert expected.sum() > 10
+    np.testing.assert_array_equal(_repeated_rows(rows, n_values), expected)

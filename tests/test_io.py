@@ -221,7 +221,7 @@ def test_several_geometries(tmp_path):
 
 
 def test_vertex_count_mismatch_is_an_error(tmp_path, monkeypatch):
-    path = export(tmp_path, OCTA_V, OCTA_F, "off")
+    path = export(tmp_path, OCTA_V, OCTA_F, "ply")  # PLY: plain OFF files never reach trimesh.load
     merged = trimesh.Scene(trimesh.Trimesh(OCTA_V[:5], OCTA_F[:4], process=False))
     monkeypatch.setattr(mio.trimesh, "load", lambda *args, **kwargs: merged)
     with pytest.raises(MeshError, match="declares 6 vertices but 5 were read"):
@@ -353,3 +353,21 @@ def test_write_mesh_ply_keeps_colors(tmp_path):
 def test_write_mesh_unsupported_extension(tmp_path):
     with pytest.raises(ParameterError, match=r"unsupported extension '\.glb'"):
         write_mesh(tmp_path / "m.glb", OCTA_V, OCTA_F)
+
+
+@pytest.mark.parametrize("text", [
+    "OFF\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1.5e-1\n3 0 1 2\n3 0 2 3\n",  # the fast reader's case
+    "OFF\n# comment\n4 2 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1.5e-1\n3 0 1 2\n3 0 2 3\n",  # trimesh's
+    "COFF\n4 2 0\n0 0 0 1 1 1 1\n1 0 0 1 1 1 1\n0 1 0 1 1 1 1\n0 0 1.5e-1 1 1 1 1\n3 0 1 2\n3 0 2 3\n",
+])
+def test_plain_off_fast_reader_agrees_with_trimesh(tmp_path, text):
+    """The hand-written reader of plain OFF files gives what trimesh gives (issue 5)."""
+    import trimesh
+
+    path = tmp_path / "m.off"
+    path.write_text(text)
+    vertices, faces = read_mesh(path)
+    reference = trimesh.load(path, process=False, force="mesh")
+    np.testing.assert_array_equal(vertices, np.asarray(reference.vertices, dtype=np.float64))
+    np.testing.assert_array_equal(faces, np.asarray(reference.faces, dtype=np.int64))
+    assert vertices.dtype == np.float64 and faces.dtype == np.int64 and faces.shape == (2, 3)

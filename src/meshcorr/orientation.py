@@ -170,6 +170,48 @@ def _tangent_frames(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return u, np.cross(normals, u)
 
 
+def _oriented_normals(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`vertex_normals` of the outward-oriented mesh, cached on it (the pipeline scores
+    several candidate maps between the same two meshes)."""
+    key = ("oriented_vertex_normals",)
+    if key not in mesh._cache:
+        normals, areas = vertex_normals(mesh.vertices, mesh_orientation(mesh).faces)
+        normals.flags.writeable = areas.flags.writeable = False
+        mesh._cache[key] = normals, areas
+    return mesh._cache[key]
+
+
+def _neighbourhoods(source: Mesh, n_neighbors: int, n_sample: int, random_state) -> tuple:
+    """The map-independent part of :func:`orientation_score`, cached on the source mesh.
+
+    Returns the sampled vertices ``(s,)``, their ``K`` nearest vertices
+    ``(s, K)``, the neighbours' tangent coordinates ``a`` ``(s, K, 2)`` and the
+    sampled vertices' areas ``(s,)``.
+    """
+    # Only a seeded sample is the same every time (random_state=None draws anew).
+    seeded = isinstance(random_state, (int, np.integer))
+    key = ("orientation_neighbourhoods", n_neighbors, n_sample, int(random_state) if seeded else None)
+    if not seeded or key not in source._cache:
+        X = source.vertices
+        src_normals, src_areas = _oriented_normals(source)
+        rng = np.random.default_rng(random_state)
+        n1 = len(X)
+        sample = np.arange(n1) if n1 <= n_sample else np.sort(rng.choice(n1, size=n_sample, replace=False))
+        k = min(n_neighbors + 1, n1)
+        _, nbrs = cKDTree(X).query(X[sample], k=k)
+        nbrs = nbrs[:, 1:]  # drop the vertex itself
+        u, v = _tangent_frames(src_normals[sample])
+        dx = X[nbrs] - X[sample, None, :]
+        a = np.stack([np.einsum("skc,sc->sk", dx, u), np.einsum("skc,sc->sk", dx, v)], axis=2)  # (s, K, 2)
+        parts = (sample, nbrs, a, src_areas[sample])
+        for array in parts:
+            array.flags.writeable = False
+        if not seeded:
+            return parts
+        source._cache[key] = parts
+    return source._cache[key]
+
+
 def orientation_score(source: Mesh, target: Mesh, mapping: np.ndarray, *, n_neighbors: int = 16,
                       n_sample: int = 2000, random_state: int | None = 0) -> float:
     """Fraction of the source on which a vertex map keeps the orientation.
@@ -203,22 +245,13 @@ def orientation_score(source: Mesh, target: Mesh, mapping: np.ndarray, *, n_neig
     if mapping.size and (mapping.min() < 0 or mapping.max() >= target.n_vertices):
         raise ParameterError(f"The map must hold target vertex indices in [0, {target.n_vertices}). "
                              f"Got values in [{mapping.min()}, {mapping.max()}] instead.")
-    X, Y = source.vertices, target.vertices
-    src_normals, src_areas = vertex_normals(X, mesh_orientation(source).faces)
-    tgt_normals, _ = vertex_normals(Y, mesh_orientation(target).faces)
-    rng = np.random.default_rng(random_state)
-    n1 = len(X)
-    sample = np.arange(n1) if n1 <= n_sample else np.sort(rng.choice(n1, size=n_sample, replace=False))
-    k = min(n_neighbors + 1, n1)
-    _, nbrs = cKDTree(X).query(X[sample], k=k)
-    nbrs = nbrs[:, 1:]  # drop the vertex itself
-    u, v = _tangent_frames(src_normals[sample])
-    dx = X[nbrs] - X[sample, None, :]
-    a = np.stack([np.einsum("skc,sc->sk", dx, u), np.einsum("skc,sc->sk", dx, v)], axis=2)  # (s, K, 2)
+    Y = target.vertices
+    sample, nbrs, a, areas = _neighbourhoods(source, n_neighbors, n_sample, random_state)
+    tgt_normals, _ = _oriented_normals(target)
     dy = Y[mapping[nbrs]] - Y[mapping[sample], None, :]  # (s, K, 3)
     c = np.einsum("skc,skt->sct", dy, a)  # (s, 3, 2): images of u, v up to a positive factor
     triple = np.einsum("sc,sc->s", tgt_normals[mapping[sample]], np.cross(c[:, :, 0], c[:, :, 1]))
-    w = src_areas[sample] * (triple != 0)
+    w = areas * (triple != 0)
     if w.sum() == 0:
         return 0.5
     return float((w * (triple > 0)).sum() / w.sum())

@@ -1,0 +1,38 @@
+"""Speed-ups of the stages before the refinement keep their results (issue 5)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from meshcorr import datasets as ds
+from meshcorr.mesh import Mesh
+from meshcorr.orientation import orientation_score
+
+
+@pytest.fixture(scope="module")
+def creature_pair():
+    rest, bent = ds.creature(resolution=1), ds.creature(resolution=1, pose="bent")
+    return (rest.vertices, rest.faces), (bent.vertices, bent.faces)
+
+
+def test_cached_orientation_score_equals_a_fresh_computation(creature_pair):
+    """Scores from the per-mesh cache equal those computed on fresh meshes, map after map."""
+    (V1, F1), (V2, F2) = creature_pair
+    source, target = Mesh(V1, F1), Mesh(V2, F2)
+    rng = np.random.default_rng(0)
+    maps = [np.arange(len(V1)), rng.integers(0, len(V2), size=len(V1)),
+            np.roll(np.arange(len(V1)), 7)]
+    for mapping in maps:
+        for n_sample in (50, 10_000):
+            cached = orientation_score(source, target, mapping, n_sample=n_sample, random_state=3)
+            fresh = orientation_score(Mesh(V1, F1), Mesh(V2, F2), mapping, n_sample=n_sample, random_state=3)
+            assert cached == fresh
+    assert orientation_score(source, target, maps[0]) > 0.95
+
+
+def test_unseeded_orientation_sample_is_not_cached(creature_pair):
+    (V1, F1), _ = creature_pair
+    mesh = Mesh(V1, F1)
+    orientation_score(mesh, mesh, np.arange(len(V1)), n_sample=20, random_state=None)
+    assert not any(key[0] == "orientation_neighbourhoods" for key in mesh._cache)

@@ -74,10 +74,18 @@ class Orientation:
     n_flipped: int
 
 
-def _signed_volume(vertices: np.ndarray, faces: np.ndarray, origin: np.ndarray) -> float:
-    """Volume enclosed by the triangles, seen from ``origin`` (divergence theorem)."""
-    v = vertices[faces] - origin
-    return float(np.einsum("ij,ij->i", v[:, 0], np.cross(v[:, 1], v[:, 2])).sum() / 6.0)
+def _signed_volumes(vertices: np.ndarray, faces: np.ndarray, origins: np.ndarray) -> np.ndarray:
+    """Volume enclosed by the triangles seen from each of ``origins`` ``(o, 3)`` (divergence theorem).
+
+    With :math:`a, b, c` the corners of a face,
+    :math:`(a - o) \\cdot ((b - o) \\times (c - o)) = a \\cdot (b \\times c) - o \\cdot ((b - a) \\times (c - a))`,
+    so every origin needs only two sums over the faces (taken about the centroid for accuracy).
+    """
+    centre = vertices.mean(axis=0)
+    v = vertices[faces] - centre
+    normals = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])  # (b - a) x (c - a)
+    volume = np.einsum("ij,ij->i", v[:, 0], np.cross(v[:, 1], v[:, 2])).sum()
+    return (volume - (np.asarray(origins) - centre) @ normals.sum(axis=0)) / 6.0
 
 
 def orient_outward(vertices: np.ndarray, faces: np.ndarray) -> Orientation:
@@ -107,7 +115,7 @@ def orient_outward(vertices: np.ndarray, faces: np.ndarray) -> Orientation:
     lo, hi = V.min(axis=0), V.max(axis=0)
     origins = [V.mean(axis=0)] + [np.where(np.array(c, dtype=bool), hi, lo)
                                   for c in np.ndindex(2, 2, 2)]
-    volumes = np.array([_signed_volume(V, fixed, o) for o in origins])
+    volumes = _signed_volumes(V, fixed, np.array(origins))
     if volumes[0] < 0:
         fixed = fixed[:, ::-1].copy()
         volumes = -volumes

@@ -40,6 +40,7 @@ The bijective option always needs the whole cost matrix.
 
 from __future__ import annotations
 
+import hashlib
 from typing import Callable
 
 import numpy as np
@@ -117,8 +118,7 @@ def _select_anchors_candidates(X, Y, source_geodesics: RowsFn, target_geodesics:
                                n_anchors: int) -> np.ndarray:
     """:func:`select_anchors` over each source vertex's nearest target vertices only."""
     n1 = len(X)
-    Z, J = cKDTree(Y).query(X, k=min(N_CANDIDATES, len(Y)), workers=-1)
-    Z, J = Z.reshape(n1, -1), J.reshape(n1, -1)
+    Z, J = _embedding_neighbours(X, Y, min(N_CANDIDATES, len(Y)))
     p1, p2 = np.zeros(n1), np.zeros(len(Y))
     used1, used2 = np.zeros(n1, dtype=bool), np.zeros(len(Y), dtype=bool)
     anchors = np.empty((n_anchors, 2), dtype=np.int64)
@@ -198,6 +198,31 @@ def proximity_matching(X: np.ndarray, Y: np.ndarray, F1: np.ndarray, F2: np.ndar
     return mapping, cost
 
 
+#: The last :func:`_embedding_neighbours` query, keyed on its inputs' contents.
+_LAST_NEIGHBOURS: dict = {}
+
+
+def _embedding_neighbours(X: np.ndarray, Y: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Distances and indices of the ``k`` nearest rows of ``Y`` to each row of ``X``, ``(n1, k)`` each.
+
+    :func:`select_anchors` and :func:`proximity_matching` ask for the same
+    query in turn (the pipeline's steps 6 and 7; ~1 s at 115k vertices), so
+    the last result is kept, read-only, keyed on the arrays' shapes and a
+    hash of their bytes (never stale, whatever the caller does to its arrays).
+    """
+    X, Y = np.ascontiguousarray(X, dtype=np.float64), np.ascontiguousarray(Y, dtype=np.float64)
+    digest = hashlib.blake2b(X.tobytes(), digest_size=16)
+    digest.update(Y.tobytes())
+    key = (X.shape, Y.shape, int(k), digest.digest())
+    if _LAST_NEIGHBOURS.get("key") != key:
+        Z, J = cKDTree(Y).query(X, k=k, workers=-1)
+        Z, J = Z.reshape(len(X), -1), J.reshape(len(X), -1)
+        Z.flags.writeable = J.flags.writeable = False
+        _LAST_NEIGHBOURS.clear()
+        _LAST_NEIGHBOURS.update(key=key, value=(Z, J))
+    return _LAST_NEIGHBOURS["value"]
+
+
 def _candidate_matching(X, Y, F1, F2, *, k: int = N_CANDIDATES) -> tuple[np.ndarray, np.ndarray]:
     """Row-wise argmin of the matching cost over KD-tree candidates, without ``n1 x n2`` blocks.
 
@@ -211,17 +236,20 @@ def _candidate_matching(X, Y, F1, F2, *, k: int = N_CANDIDATES) -> tuple[np.ndar
     """
     n1, n2 = len(X), len(Y)
     k = min(k, n2)
-    trees = [(cKDTree(Y), X, k, 0.0)]
+    nearest = _embedding_neighbours(X, Y, k)[1]
+    combined = None
     if F1.size:
-        trees.append((cKDTree(np.hstack([Y, F2])), np.hstack([X, F1]), max(1, k // 2), 3.0))
-    width = sum(kk for _, _, kk, _ in trees)
+        combined = (cKDTree(np.hstack([Y, F2])), np.hstack([X, F1]), max(1, k // 2))
+    width = k + (combined[2] if combined else 0)
     mapping = np.empty(n1, dtype=np.int64)
     cost = np.empty(n1)
     step = max(1, _BLOCK_ELEMENTS // (8 * width))
     for start in range(0, n1, step):
         rows = np.arange(start, min(n1, start + step))
-        J = np.hstack([tree.query(points[rows], k=kk, eps=eps, workers=-1)[1].reshape(len(rows), kk)
-                       for tree, points, kk, eps in trees])
+        J = nearest[rows]
+        if combined is not None:
+            tree, points, kk = combined
+            J = np.hstack([J, tree.query(points[rows], k=kk, eps=3.0, workers=-1)[1].reshape(len(rows), kk)])
         C = _pair_cost(X, Y, F1, F2, np.repeat(rows, width), J.ravel()).reshape(len(rows), width)
         cost[rows] = C.min(axis=1)
         mapping[rows] = np.where(C == cost[rows, None], J, n2).min(axis=1)  # ties: lowest index

@@ -66,3 +66,16 @@ def test_bad_parameters_are_rejected(kwargs, message):
     X = np.zeros((20, 3))
     with pytest.raises(ParameterError, match=message):
         tps_icp(X, X, **kwargs)
+
+
+@pytest.mark.parametrize("smoothing", [0.0, 0.3, 1e6])
+def test_tps_equals_scipy_rbf_interpolator(smoothing):
+    """The hand-written spline is scipy's RBFInterpolator(kernel="linear", degree=1) (issue 5)."""
+    from scipy.interpolate import RBFInterpolator
+
+    rng = np.random.default_rng(5)
+    src = rng.normal(size=(120, 5)) * [1.0, 0.5, 0.3, 0.2, 0.1]
+    dst = src + 0.1 * np.sin(3 * src)
+    query = rng.normal(size=(20_000, 5)) * 0.5  # more than one evaluation block
+    reference = RBFInterpolator(src, dst, kernel="linear", degree=1, smoothing=smoothing)(query)
+    np.testing.assert_allclose(fit_tps(src, dst, smoothing)(query), reference, rtol=0, atol=1e-9)

@@ -98,3 +98,43 @@ def test_refine_errors(poses):
         zoomout(phi, phi, np.arange(10), k_start=2, step=0)
     with pytest.raises(ParameterError, match="refine_k_start"):
         zoomout(phi, phi, np.arange(10), k_start=5)
+
+
+def test_laplace_basis_matches_a_dense_generalised_eigh_up_to_sign(poses):
+    import potpourri3d as pp3d
+    import scipy.linalg
+
+    mesh = poses[1]
+    values, phi = laplace_basis(mesh, 10)
+    L = pp3d.cotan_laplacian(mesh.vertices, mesh.faces).toarray()
+    mass = pp3d.vertex_areas(mesh.vertices, mesh.faces)
+    ref_values, ref = scipy.linalg.eigh(L, np.diag(mass / mass.sum()), subset_by_index=[0, 9])
+    np.testing.assert_allclose(values[1:], ref_values[1:], rtol=1e-8)
+    signs = np.sign(np.sum(phi * ref, axis=0))
+    np.testing.assert_allclose(phi[:, 1:], (ref * signs)[:, 1:], atol=1e-6)
+
+
+def test_pruned_search_equals_brute_force(poses):
+    from meshcorr.refine import _nearest_rows, _nearest_rows_pruned
+
+    rest, bent = poses
+    _, phi1 = laplace_basis(rest, 20)
+    _, phi2 = laplace_basis(bent, 20)
+    queries = phi1 + np.random.default_rng(0).normal(0.0, 0.05, phi1.shape)
+    for n_cells in (1, 40, 400):
+        np.testing.assert_array_equal(_nearest_rows_pruned(queries, phi2, n_cells=n_cells),
+                                      _nearest_rows(queries, phi2))
+    cloud = np.random.default_rng(1).normal(size=(2000, 8))  # no manifold: little pruning, still exact
+    np.testing.assert_array_equal(_nearest_rows_pruned(cloud[:300] + 0.1, cloud, n_cells=50),
+                                  _nearest_rows(cloud[:300] + 0.1, cloud))
+
+
+def test_zoomout_prunes_above_the_threshold_with_the_same_map(poses, monkeypatch):
+    import meshcorr.refine as refine_module
+
+    rest, bent = poses
+    start = noisy_identity(bent, 0.03)
+    brute, _ = refine_map(rest, bent, start, k=20)
+    monkeypatch.setattr(refine_module, "PRUNE_ABOVE", 10)
+    pruned, _ = refine_map(rest, bent, start, k=20)
+    np.testing.assert_array_equal(pruned, brute)

@@ -27,6 +27,20 @@ The basis solves :math:`L \\phi = \\lambda M \\phi` with the cotangent Laplacian
 :math:`L` and the lumped (barycentric) mass matrix :math:`M` of
 ``potpourri3d``, by shift-invert Lanczos (``scipy.sparse.linalg.eigsh``), and
 is cached on the :class:`~meshcorr.mesh.Mesh` per size.
+
+Speed at 100k+ vertices (issue 5). The last step maps every source vertex
+to its nearest target vertex in the K-dimensional spectral space; brute
+force costs ``O(n1 n2 K)`` (~40 s at 115k vertices). Above
+:data:`PRUNE_ABOVE` target vertices it is pruned exactly by the triangle
+inequality over seeded cells (:func:`_nearest_rows_pruned`, in the spirit of
+cluster-pruning exact search, e.g. Fukunaga & Narendra, "A branch and bound
+algorithm for computing k-nearest neighbors", IEEE Trans. Computers 1975):
+the same map, ~15x less work on spectral coordinates. A KD-tree is slower
+than brute force in 40 dimensions, and a greedy descent over the target's
+one-ring from a coarse winner stops in local minima for about half the
+vertices (both measured, ``benchmarks/RESULTS-refine.md``). ARPACK runs
+with single-threaded BLAS: its work outside the sparse solves is
+memory-bound, and threads only add waits on a shared 2-core machine.
 """
 
 from __future__ import annotations
@@ -35,11 +49,16 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import linear_sum_assignment
 from scipy.sparse.linalg import eigsh
+from threadpoolctl import threadpool_limits
 
 from ._params import check_int
 from .embedding import deterministic_start, sign_convention
 from .errors import ParameterError
 from .mesh import Mesh
+
+#: Target vertex count above which the final all-vertices search prunes by
+#: cells (:func:`_nearest_rows_pruned`, exact) instead of brute force.
+PRUNE_ABOVE = 20_000
 
 
 def laplace_basis(mesh: Mesh, k: int, *, random_state: int | None = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -77,8 +96,11 @@ def laplace_basis(mesh: Mesh, k: int, *, random_state: int | None = 0) -> tuple[
         # A tiny negative shift keeps the shift-inverted operator non-singular
         # (L is singular: constants are in its kernel).
         shift = -1e-8 * float(np.abs(L.diagonal()).mean() / mass.mean())
-        values, vectors = eigsh(L.tocsc(), k=k, M=sp.diags(mass).tocsc(), sigma=shift, which="LM",
-                                v0=deterministic_start(n, random_state))
+        # ARPACK's reorthogonalisation is memory-bound BLAS-2: threads only add
+        # waits (measured 2x slower with 2 threads on a loaded 2-core machine).
+        with threadpool_limits(limits=1, user_api="blas"):
+            values, vectors = eigsh(L.tocsc(), k=k, M=sp.diags(mass).tocsc(), sigma=shift, which="LM",
+                                    v0=deterministic_start(n, random_state))
         order = np.argsort(values)
         values, vectors = values[order], sign_convention(vectors[:, order])
         vectors.flags.writeable = False
@@ -98,6 +120,50 @@ def _nearest_rows(queries: np.ndarray, points: np.ndarray) -> np.ndarray:
     for start in range(0, len(queries), step):
         block = queries[start:start + step]
         out[start:start + step] = np.argmin(sq[None, :] - 2.0 * block @ points.T, axis=1)
+    return out
+
+
+def _nearest_rows_pruned(queries: np.ndarray, points: np.ndarray, *, n_cells: int = 2000,
+                         random_state: int | None = 0) -> np.ndarray:
+    """Exact nearest row of ``points`` for each query, by cells and the triangle inequality.
+
+    ``n_cells`` seeded points are cell centres :math:`c`; every point joins
+    the cell of its nearest centre, and :math:`r_c` is the cell's radius.
+    Queries are grouped by their nearest centre. A query :math:`q` whose
+    best distance so far is :math:`d` cannot have its nearest point in cell
+    :math:`c` when :math:`\\lVert q - c \\rVert - r_c > d`; each group first
+    searches its own cell, then brute-forces only the cells that bound
+    leaves open. The answer equals brute force (up to ties) at a fraction of
+    its ``O(n1 n2 K)`` cost when points lie on a low-dimensional manifold,
+    as spectral coordinates of a surface do.
+    """
+    n2 = len(points)
+    n_cells = min(n_cells, n2)
+    rng = np.random.default_rng(random_state)
+    chosen = np.sort(rng.choice(n2, size=n_cells, replace=False))
+    centres = points[chosen]
+    owner = _nearest_rows(points, centres)
+    owner[chosen] = np.arange(n_cells)  # no cell is empty, even with duplicate points
+    radius = np.zeros(n_cells)
+    np.maximum.at(radius, owner, np.linalg.norm(points - centres[owner], axis=1))
+    order = np.argsort(owner, kind="stable")
+    bounds = np.searchsorted(owner[order], np.arange(n_cells + 1))
+    group = _nearest_rows(queries, centres)
+    q_order = np.argsort(group, kind="stable")
+    q_bounds = np.searchsorted(group[q_order], np.arange(n_cells + 1))
+    sq_c = np.einsum("ij,ij->i", centres, centres)
+    sq_p = np.einsum("ij,ij->i", points, points)
+    out = np.empty(len(queries), dtype=np.int64)
+    for c in np.flatnonzero(np.diff(q_bounds)):
+        rows = q_order[q_bounds[c]:q_bounds[c + 1]]
+        q = queries[rows]
+        sq_q = np.einsum("ij,ij->i", q, q)
+        own = order[bounds[c]:bounds[c + 1]]  # never empty: the centre itself is in it
+        best = np.sqrt(np.maximum((sq_p[own][None, :] - 2.0 * q @ points[own].T).min(axis=1) + sq_q, 0.0))
+        to_centres = np.sqrt(np.maximum(sq_c[None, :] - 2.0 * q @ centres.T + sq_q[:, None], 0.0))
+        open_cells = np.flatnonzero((to_centres - radius[None, :] <= best[:, None] * (1 + 1e-9)).any(axis=0))
+        cand = np.concatenate([order[bounds[o]:bounds[o + 1]] for o in open_cells])
+        out[rows] = cand[np.argmin(sq_p[cand][None, :] - 2.0 * q @ points[cand].T, axis=1)]
     return out
 
 
@@ -121,8 +187,9 @@ def zoomout(source_basis: np.ndarray, target_basis: np.ndarray, mapping: np.ndar
         Basis functions added per iteration.
     n_sample : int
         Vertices sampled on each mesh for the iterations (sub-sampled
-        ZoomOut); the last step maps every source vertex to every target
-        vertex.
+        ZoomOut); the last step maps every source vertex to its nearest
+        target vertex (exact; pruned above :data:`PRUNE_ABOVE` target
+        vertices).
     bijective : bool
         Make the final map one-to-one by linear assignment in the spectral
         space (needs ``n1 == n2``).
@@ -172,6 +239,8 @@ def zoomout(source_basis: np.ndarray, target_basis: np.ndarray, mapping: np.ndar
         out = np.empty(n1, dtype=np.int64)
         out[rows] = cols
         return out, history
+    if n2 > PRUNE_ABOVE:
+        return _nearest_rows_pruned(queries, target_basis, random_state=random_state), history
     return _nearest_rows(queries, target_basis), history
 
 

@@ -83,9 +83,7 @@ def nystrom_eigenpairs(landmarks: np.ndarray, distances: np.ndarray, sigma: floa
 
 
 def _nystrom(landmarks, distances, sigma, k, rcond):
-    # Element-wise on the contiguous (m, n) rows, then transposed: the same values, 2-3x
-    # faster than on the strided transpose at 100k vertices.
-    C = np.exp(distances ** 2 * (-1.0 / (2.0 * sigma * sigma))).T  # (n, m)
+    C = np.exp(distances.T ** 2 * (-1.0 / (2.0 * sigma * sigma)))  # (n, m)
     W = C[landmarks]
     W = 0.5 * (W + W.T)
     w, Q = np.linalg.eigh(W)

@@ -166,9 +166,10 @@ def _rank(X, Y, configs, n_sample, n_rescore, n_score, rng, chosen=None) -> list
 
     Wrong configurations put the queries far from the target, where KD-tree
     queries are slow, so the configurations are whittled down on growing
-    random subsets: a coarse pass (48 source against 256 target points)
-    keeps the best 256, a second pass (``n_sample`` source points against
-    ``2 * n_sample``, at least 1000, target points) the best ``n_rescore``;
+    random subsets, scored by brute force (:func:`_brute_costs`): a coarse
+    pass (48 source against 256 target points) keeps the best 256, a second
+    pass (``n_sample`` source points against ``2 * n_sample``, at least 1000,
+    target points) the best ``n_rescore``;
     those are scored on all points, or for larger meshes on seeded samples
     of ``n_score`` source and ``n_score`` target points (KD-tree queries far
     from a dense target are slow: ~10 us per query at 5k target points,

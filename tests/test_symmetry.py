@@ -158,14 +158,14 @@ def test_orientation_score_bad_maps(pair):
 # -- choosing among candidates ------------------------------------------------------------------
 
 
-def _candidate(rank, orientation, distortion):
+def _candidate(rank, orientation, curvature, distortion=np.nan):
     return Candidate(rank, Configuration((0, 1), (1, 1 if rank % 2 == 0 else -1), 0.1 + rank),
-                     orientation, distortion, np.zeros(1, dtype=np.int64))
+                     orientation, curvature, distortion, np.zeros(1, dtype=np.int64))
 
 
 @pytest.mark.parametrize("order", [(0, 1), (1, 0)])
 def test_auto_prefers_orientation_whatever_comes_first(order):
-    preserving, mirror = _candidate(0, 0.9, 0.020), _candidate(1, 0.1, 0.019)
+    preserving, mirror = _candidate(0, 0.9, 0.30), _candidate(1, 0.1, 0.29)
     candidates = [(preserving, mirror)[i] for i in order]
     chosen, other = choose(candidates, "auto")
     assert chosen is preserving and other is mirror
@@ -175,17 +175,20 @@ def test_auto_prefers_orientation_whatever_comes_first(order):
     assert chosen is candidates[0] and other is candidates[1]
 
 
-def test_auto_rejects_distorted_orientation_preserving_maps():
-    front_back = _candidate(0, 0.9, 0.08)  # preserves orientation but is not an isometry
-    right, mirror = _candidate(2, 0.85, 0.02), _candidate(1, 0.1, 0.02)
-    chosen, other = choose([front_back, mirror, right], "auto")
+def test_auto_rejects_a_half_turn_by_its_curvature():
+    half_turn = _candidate(0, 0.9, 0.45, 0.019)  # preserves orientation, nose to the back of the head
+    right, mirror = _candidate(2, 0.85, 0.30, 0.021), _candidate(1, 0.1, 0.31, 0.020)
+    front_back = _candidate(3, 0.1, 0.44, 0.019)  # the half turn's mirror image
+    chosen, other = choose([half_turn, mirror, right, front_back], "auto")
     assert chosen is right and other is mirror
 
 
 def test_unreliable_orientation_falls_back_to_distortion():
-    a, b = _candidate(0, 0.1, 0.01), _candidate(1, 0.9, 0.02)
+    a, b = _candidate(0, 0.1, 0.5, 0.01), _candidate(1, 0.9, 0.3, 0.02)
     chosen, other = choose([a, b], "auto", orientation_reliable=False)
     assert chosen is a and other is b
+    chosen, other = choose([a, b], "auto")
+    assert chosen is b and other is a
 
 
 def test_choose_errors():

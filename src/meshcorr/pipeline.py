@@ -23,6 +23,7 @@ import numpy as np
 
 from ._params import check_choice, check_float, check_int
 from .anchors import anchor_descriptors, proximity_matching, select_anchors
+from .curvature import curvature_disagreement
 from .errors import MeshWarning, ParameterError
 from .geodesics import GEODESIC_METHODS
 from .icp import tps_icp
@@ -38,7 +39,8 @@ from .tps import mean_pairwise_distance
 
 #: Laplace-Beltrami basis size of the ZoomOut refinement (see :mod:`meshcorr.refine`).
 REFINE_K = 40
-#: Geodesic rows sampled on the source for the metric distortion of a candidate.
+#: Geodesic rows sampled on the source for the metric distortion of a candidate
+#: (measured only when the orientation is unreliable).
 N_DISTORTION_SOURCES = 16
 ANCHOR_SCALES = ("embedding", "geodesic")
 
@@ -109,8 +111,8 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
         Pre-align the inputs to their principal axes (spatial baselines only).
     symmetry : {"auto", "cost", "mirror"}
         How to choose among near-tied eigenvector configurations (the
-        left/right mirror, :mod:`meshcorr.symmetry`): "auto" keeps the least
-        distorted orientation-preserving map; "cost" the cheapest
+        left/right mirror, :mod:`meshcorr.symmetry`): "auto" keeps the
+        orientation-preserving map whose curvature agrees best; "cost" the cheapest
         configuration (the paper); "mirror" the alternative "auto" keeps.
     refine : bool
         Refine the map by ZoomOut spectral upsampling (:mod:`meshcorr.refine`).
@@ -176,7 +178,7 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
                    bijective=bijective, random_state=random_state)
     with timer.stage("symmetry"):
         reliable = mesh_orientation(src).reliable and mesh_orientation(tgt).reliable
-    candidates = _score_candidates(src, tgt, spectra, configurations, timer, options)
+    candidates = _score_candidates(src, tgt, spectra, configurations, timer, options, reliable=reliable)
     chosen, other = choose(candidates, symmetry, orientation_reliable=reliable)
     if not reliable and symmetry == "auto" and len(candidates) > 1:
         why = mesh_orientation(src).reason or mesh_orientation(tgt).reason
@@ -232,14 +234,14 @@ def _chosen_first(configurations: list[Configuration], chosen: Candidate,
 
 
 def _score_candidates(src: Mesh, tgt: Mesh, spectra, configurations: list[Configuration],
-                      timer: StageTimer, options: dict) -> list[Candidate]:
-    """Align each near-tied configuration and score its map (orientation, distortion).
+                      timer: StageTimer, options: dict, *, reliable: bool) -> list[Candidate]:
+    """Align each near-tied configuration and score its map (orientation, curvature).
 
-    The score uses each candidate's TPS-ICP nearest-neighbour map: the
+    The scores use each candidate's TPS-ICP nearest-neighbour map: the
     anchors and the refinement only run for the chosen map and its
-    alternative (:func:`_finish`). Measuring the distortion after ZoomOut
-    instead was tried on 40 TOSCA pairs: same flip rate (2/40, other
-    pairs), 35 % slower (benchmarks/RESULTS-symmetry.md).
+    alternative (:func:`_finish`). The metric distortion (single-source
+    geodesic solves, the costliest score at 100k vertices) is measured only
+    when the orientation is unreliable, the one case where it decides.
     """
     X, Y = spectra[0].embedding, spectra[1].embedding
     g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
@@ -252,10 +254,13 @@ def _score_candidates(src: Mesh, tgt: Mesh, spectra, configurations: list[Config
         with timer.stage("icp"):
             icp = _align(X, configuration.apply(Y), **options)
         with timer.stage("symmetry"):
+            seed = options["random_state"]
             candidates.append(Candidate(
                 rank=rank, configuration=configuration,
-                orientation=orientation_score(src, tgt, icp.matches, random_state=options["random_state"]),
-                distortion=metric_distortion(g1, g2, icp.matches, sources, source_rows),
+                orientation=orientation_score(src, tgt, icp.matches, random_state=seed),
+                curvature=curvature_disagreement(src, tgt, icp.matches, random_state=seed),
+                distortion=(np.nan if reliable else
+                            metric_distortion(g1, g2, icp.matches, sources, source_rows)),
                 mapping=icp.matches, extra={"icp": icp, "anchors": np.zeros((0, 2), dtype=np.int64),
                                             "cost": None}))
     return candidates

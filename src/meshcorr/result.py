@@ -55,7 +55,8 @@ class Correspondence:
     candidates : list of dict
         The near-tied configurations whose maps were scored to resolve the
         left/right mirror (:mod:`meshcorr.symmetry`): rank, perm, signs,
-        cost, orientation score, metric distortion, and which one was
+        cost, orientation score, curvature disagreement, metric distortion
+        (None unless the orientation was unreliable), and which one was
         chosen / kept as the alternative.
     alternative_map : (n_source,) int or None
         The map of the alternative candidate (usually the mirror image of

@@ -12,18 +12,31 @@ these apart:
   near 1 for an orientation-preserving map, near 0 for a mirrored one. The
   left/right mirror reverses orientation; it is invisible to every intrinsic
   measure.
+- the **curvature disagreement**
+  (:func:`meshcorr.curvature.curvature_disagreement`): how much the smoothed
+  signed mean curvature changes across the map. Besides the mirror, the
+  near-tied configurations of a person hold a *half turn* about the body's
+  long axis (front to back and left to right): it preserves orientation
+  and, a person being thin, it is almost an isometry, but it takes a nose to
+  the back of a head and knee caps to the backs of the knees. Measured on
+  TOSCA pairs, the metric distortion below could not tell it from the right
+  map (differences of 1 %, either way), while the curvature disagreement of
+  the half turn was 1.3-1.7x the right map's on every pair
+  (benchmarks/RESULTS-symmetry.md).
 - the **metric distortion**, the mean over a few source vertices :math:`i`
   and all vertices :math:`j` of
   :math:`|g_1(i, j) - g_2(f(i), f(j))|` with geodesics normalised by each
-  mesh's largest one: 0 for an isometry. It rejects non-isometric
-  confusions (front/back, a wrong eigenvector order) that happen to
-  preserve orientation. This is the Gromov-Hausdorff-type criterion of
-  isometric matching (Bronstein, Bronstein & Kimmel, PNAS 2006).
+  mesh's largest one: 0 for an isometry (the Gromov-Hausdorff-type
+  criterion of isometric matching; Bronstein, Bronstein & Kimmel, PNAS
+  2006). Signed curvature needs an outward normal: when a mesh's outside is
+  undefined (:mod:`meshcorr.orientation`), both orientation and curvature
+  are set aside and the distortion decides.
 
-:func:`choose` takes the least distorted orientation-preserving candidate
-(``"auto"``), the cheapest configuration (``"cost"``, the paper's choice), or
-the alternative of ``"auto"`` (``"mirror"``). The alternative kept in the
-result is the least distorted candidate of the opposite orientation.
+:func:`choose` takes the orientation-preserving candidate whose curvature
+agrees best (``"auto"``), the cheapest configuration (``"cost"``, the
+paper's choice), or the alternative of ``"auto"`` (``"mirror"``). The
+alternative kept in the result is the best-agreeing candidate of the
+opposite orientation.
 """
 
 from __future__ import annotations
@@ -50,8 +63,11 @@ class Candidate:
     configuration : Configuration
     orientation : float
         Orientation score of the candidate's map, in [0, 1].
+    curvature : float
+        Curvature disagreement of the candidate's map (NaN if not measured).
     distortion : float
-        Metric distortion of the candidate's map (normalised geodesics).
+        Metric distortion of the candidate's map (normalised geodesics; NaN
+        if not measured).
     mapping : (n1,) int
         The candidate's map (source vertex -> target vertex, local numbering).
     extra : dict
@@ -61,6 +77,7 @@ class Candidate:
     rank: int
     configuration: Configuration
     orientation: float
+    curvature: float
     distortion: float
     mapping: np.ndarray
     extra: dict = field(default_factory=dict)
@@ -68,7 +85,12 @@ class Candidate:
     def to_dict(self) -> dict:
         return {"rank": self.rank, **self.configuration.to_dict(),
                 "orientation": round(float(self.orientation), 4),
-                "distortion": round(float(self.distortion), 5)}
+                "curvature": _rounded(self.curvature, 4), "distortion": _rounded(self.distortion, 5)}
+
+
+def _rounded(value: float, digits: int) -> float | None:
+    """``value`` rounded for JSON; None when it was not measured (NaN)."""
+    return None if not np.isfinite(value) else round(float(value), digits)
 
 
 def candidate_ranks(configurations: list[Configuration], *, tolerance: float = 0.25,
@@ -138,44 +160,48 @@ def choose(candidates: list[Candidate], symmetry: str = "auto", *,
     candidates : list of Candidate
         In rank order (``candidates[0]`` is the cheapest configuration).
     symmetry : {"auto", "cost", "mirror"}
-        ``"auto"``: the least distorted orientation-preserving candidate
-        (score >= 0.5); if none preserves orientation or the orientation is
-        unreliable, the least distorted one. ``"cost"``: the cheapest
-        configuration. ``"mirror"``: the alternative ``"auto"`` would keep.
+        ``"auto"``: among the orientation-preserving candidates (score >=
+        0.5; all of them if none is), the one whose curvature agrees best;
+        with an unreliable orientation, the least distorted candidate.
+        ``"cost"``: the cheapest configuration. ``"mirror"``: the
+        alternative ``"auto"`` would keep.
     orientation_reliable : bool
         False when a mesh's outside is undefined (see
-        :mod:`meshcorr.orientation`): orientation scores are then ignored.
+        :mod:`meshcorr.orientation`): orientation scores and the signed
+        curvature are then ignored, and each candidate's ``distortion``
+        must be measured.
 
     Returns
     -------
     chosen : Candidate
     alternative : Candidate or None
-        The least distorted candidate of the orientation opposite to the
-        chosen one's (for ``"cost"``: to the cheapest one's); None with a
+        The best candidate (same criterion) of the orientation opposite to
+        the chosen one's (for ``"cost"``: to the cheapest one's); None with a
         single candidate.
     """
     check_choice("symmetry", symmetry, SYMMETRY_MODES)
     if not candidates:
         raise ValueError("No candidate configuration to choose from.")
+    criterion = "curvature" if orientation_reliable else "distortion"
 
-    def least_distorted(pool):
-        return min(pool, key=lambda c: (c.distortion, c.rank)) if pool else None
+    def best(pool):
+        return min(pool, key=lambda c: (getattr(c, criterion), c.rank)) if pool else None
 
     def opposite(of: Candidate) -> Candidate | None:
         rest = [c for c in candidates if c is not of]
         if not orientation_reliable:
-            return least_distorted(rest)
+            return best(rest)
         preserving = of.orientation >= 0.5
-        return least_distorted([c for c in rest if (c.orientation >= 0.5) != preserving]) or least_distorted(rest)
+        return best([c for c in rest if (c.orientation >= 0.5) != preserving]) or best(rest)
 
     if symmetry == "cost":
         chosen = candidates[0]
         return chosen, opposite(chosen)
     if orientation_reliable:
-        best = least_distorted([c for c in candidates if c.orientation >= 0.5]) or least_distorted(candidates)
+        chosen = best([c for c in candidates if c.orientation >= 0.5]) or best(candidates)
     else:
-        best = least_distorted(candidates)
-    other = opposite(best)
+        chosen = best(candidates)
+    other = opposite(chosen)
     if symmetry == "mirror" and other is not None:
-        return other, best
-    return best, other
+        return other, chosen
+    return chosen, other

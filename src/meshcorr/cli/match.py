@@ -76,7 +76,8 @@ def add_parser(sub) -> None:
     g.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     g.add_argument("--symmetry", choices=("auto", "cost", "mirror"), default="auto",
                    help="choice among near-tied eigenvector configurations: auto keeps the "
-                        "orientation-preserving map (resolves the left/right mirror), cost the cheapest "
+                        "orientation-preserving map whose curvature agrees best (resolves the left/right "
+                        "mirror and front/back half turns), cost the cheapest "
                         "configuration (the paper), mirror the other one (default: auto)")
     g.add_argument("--refine", action=argparse.BooleanOptionalAction, default=True,
                    help="refine the map by ZoomOut spectral upsampling (default: on)")

@@ -1,0 +1,178 @@
+"""Smoothed signed mean curvature: a descriptor that tells front from back.
+
+On a thin, left/right-symmetric shape (a person), a map that turns the body
+half a turn about its long axis (front to back and left to right) preserves
+orientation, and it is almost an isometry: geodesic distances on a thin
+body barely see front from back. Orientation and metric distortion cannot
+reject it (:mod:`meshcorr.symmetry`); curvature can: a nose, a knee cap or
+the toes are convex where the back of the head, the back of the knee or
+the heel are flatter or concave.
+
+The signed mean curvature :math:`H` comes from the mean-curvature normal,
+:math:`\\Delta x = -2 H n` for the Laplace-Beltrami operator applied to
+the coordinate functions (Meyer, Desbrun, Schroeder & Barr, "Discrete
+differential-geometry operators for triangulated 2-manifolds", 2003):
+
+.. math::
+
+    H_i = \\tfrac{1}{2} \\langle (M^{-1} L X)_i, n_i \\rangle \\sqrt{A}
+
+with the cotangent Laplacian :math:`L` (positive semi-definite), the lumped
+mass :math:`M`, the outward vertex normals :math:`n` and the total area
+:math:`A` (the factor makes :math:`H` scale-invariant): positive on convex
+parts. It is invariant to rigid motions and uniform scaling and changes
+under bending only near the joints. Clipped to its 1st-99th percentiles
+(badly shaped triangles give spikes), it is averaged over Euclidean balls
+of radius :math:`r \\sqrt{A}`, weighted by vertex area (the curvature
+integrated over the ball divided by the ball's area: the same on a coarse
+and a finely subdivided mesh), at a few radii, and standardised by its mean
+and standard deviation over an area-weighted vertex sample, so that two
+meshes of different resolution and size compare. Evaluating it only at a
+sample of source vertices and their images keeps the cost independent of
+the mesh size (balls hold more vertices on finer meshes; a sparse
+diffusion solve instead took ~40 s per mesh at 115k vertices).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ._params import check_int
+from .errors import ParameterError
+from .mesh import Mesh
+from .orientation import mesh_orientation, vertex_normals
+
+#: Ball radii, as fractions of sqrt(area), over which the curvature is averaged.
+CURVATURE_RADII = (0.03, 0.06)
+
+
+def signed_mean_curvature(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """Scale-free signed mean curvature per vertex, and the lumped vertex areas.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        Its winding is repaired and turned outwards internally
+        (:func:`meshcorr.orientation.mesh_orientation`).
+
+    Returns
+    -------
+    curvature : (n,) float
+        :math:`H_i \\sqrt{A}` (module docstring): :math:`2 \\sqrt{\\pi}` on a
+        sphere, positive where the surface is convex.
+    mass : (n,) float
+        Lumped (barycentric) vertex areas.
+    """
+    import potpourri3d as pp3d
+
+    V = np.asarray(mesh.vertices, dtype=float)
+    faces = mesh_orientation(mesh).faces
+    normals, mass = vertex_normals(V, faces)
+    L = pp3d.cotan_laplacian(V, faces)
+    safe = np.where(mass > 0, mass, mass[mass > 0].min() if (mass > 0).any() else 1.0)
+    H = 0.5 * np.einsum("ij,ij->i", (L @ V) / safe[:, None], normals) * np.sqrt(mass.sum())
+    return H, mass
+
+
+def _curvature_field(mesh: Mesh) -> tuple[np.ndarray, np.ndarray, cKDTree, float]:
+    """Clipped curvature, vertex areas, a KD-tree of the vertices and sqrt(area), cached on the mesh."""
+    key = ("curvature_field",)
+    if key not in mesh._cache:
+        H, mass = signed_mean_curvature(mesh)
+        H = np.clip(H, *np.percentile(H, [1.0, 99.0]))
+        mesh._cache[key] = (H, mass, cKDTree(np.asarray(mesh.vertices, dtype=float)), float(np.sqrt(mass.sum())))
+    return mesh._cache[key]
+
+
+def smoothed_curvature(mesh: Mesh, vertices: np.ndarray, radius: float) -> np.ndarray:
+    """Average signed mean curvature over balls around some vertices.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    vertices : (s,) int
+        Where to evaluate.
+    radius : float
+        Ball radius as a fraction of :math:`\\sqrt{A}`.
+
+    Returns
+    -------
+    curvature : (s,) float
+        :math:`\\sum_{j \\in B_i} m_j H_j / \\sum_{j \\in B_i} m_j` over the
+        vertices :math:`j` within Euclidean distance ``radius`` of vertex
+        :math:`i` (module docstring): the curvature integrated over the ball
+        divided by its area, so that meshes of different resolution agree.
+    """
+    H, mass, tree, length = _curvature_field(mesh)
+    vertices = np.asarray(vertices, dtype=np.int64)
+    if vertices.size == 0:
+        return np.zeros(0)
+    balls = tree.query_ball_point(np.asarray(mesh.vertices)[vertices], radius * length, return_sorted=False)
+    sizes = np.fromiter((len(b) for b in balls), dtype=np.int64, count=len(balls))
+    members = np.concatenate([np.asarray(b, dtype=np.int64) for b in balls])
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    return np.add.reduceat(mass[members] * H[members], starts) / np.add.reduceat(mass[members], starts)
+
+
+def curvature_disagreement(source: Mesh, target: Mesh, mapping: np.ndarray, *,
+                           radii: tuple[float, ...] = CURVATURE_RADII, n_sample: int = 1000,
+                           random_state: int | None = 0) -> float:
+    """Mean difference of smoothed, standardised mean curvature across a map.
+
+    Parameters
+    ----------
+    source, target : Mesh
+    mapping : (n1,) int
+        ``mapping[i]`` is the target vertex of source vertex i.
+    radii : tuple of float
+        Ball radii of :func:`smoothed_curvature`.
+    n_sample : int
+        Source vertices :math:`S` compared (a seeded area-weighted sample),
+        and target vertices drawn the same way to standardise the target's
+        curvature.
+    random_state : int or None
+        Seed of the samples.
+
+    Returns
+    -------
+    disagreement : float
+        :math:`\\frac{1}{|R||S|} \\sum_{r \\in R} \\sum_{i \\in S}
+        |\\hat h^1_r(i) - \\hat h^2_r(f(i))|`, with :math:`\\hat h_r` the
+        ball-averaged curvature standardised by its mean and standard
+        deviation over the mesh's sample: about 0 for an exact copy, about
+        1.1 (the mean absolute difference of two independent standard
+        normal variables) for an unrelated map.
+    """
+    n_sample = check_int("n_sample", n_sample, minimum=2)
+    mapping = np.asarray(mapping)
+    if mapping.shape != (source.n_vertices,) or (mapping.size and (
+            mapping.min() < 0 or mapping.max() >= target.n_vertices)):
+        raise ParameterError(f"The map must hold one target vertex in [0, {target.n_vertices}) per "
+                             f"source vertex ({source.n_vertices}). Got shape {mapping.shape}.")
+    samples = [_area_sample(mesh, n_sample, random_state) for mesh in (source, target)]
+    total = 0.0
+    for r in radii:
+        h1 = smoothed_curvature(source, samples[0], r)
+        reference = smoothed_curvature(target, samples[1], r)
+        h2 = smoothed_curvature(target, mapping[samples[0]], r)
+        total += float(np.abs(_standardise(h1, h1) - _standardise(h2, reference)).mean())
+    return total / len(radii)
+
+
+def _standardise(values: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    std = reference.std()
+    return (values - reference.mean()) / (std if std > 0 else 1.0)
+
+
+def _area_sample(mesh: Mesh, n: int, random_state: int | None) -> np.ndarray:
+    """``n`` vertices drawn with probability proportional to their area (all if fewer), cached."""
+    key = ("area_sample", n, random_state)
+    if key not in mesh._cache:
+        _, mass, _, _ = _curvature_field(mesh)
+        if mesh.n_vertices <= n:
+            mesh._cache[key] = np.arange(mesh.n_vertices)
+        else:
+            rng = np.random.default_rng(random_state)
+            mesh._cache[key] = np.sort(rng.choice(mesh.n_vertices, size=n, replace=False, p=mass / mass.sum()))
+    return mesh._cache[key]

@@ -44,7 +44,7 @@ from .mesh import Mesh
 from .orientation import mesh_orientation, vertex_normals
 
 #: Ball radii, as fractions of sqrt(area), over which the curvature is averaged.
-CURVATURE_RADII = (0.03, 0.06)
+CURVATURE_RADII = (0.045,)
 
 
 def signed_mean_curvature(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
@@ -150,19 +150,14 @@ def curvature_disagreement(source: Mesh, target: Mesh, mapping: np.ndarray, *,
             mapping.min() < 0 or mapping.max() >= target.n_vertices)):
         raise ParameterError(f"The map must hold one target vertex in [0, {target.n_vertices}) per "
                              f"source vertex ({source.n_vertices}). Got shape {mapping.shape}.")
-    samples = [_area_sample(mesh, n_sample, random_state) for mesh in (source, target)]
+    sample = _area_sample(source, n_sample, random_state)
     total = 0.0
     for r in radii:
-        h1 = smoothed_curvature(source, samples[0], r)
-        reference = smoothed_curvature(target, samples[1], r)
-        h2 = smoothed_curvature(target, mapping[samples[0]], r)
-        total += float(np.abs(_standardise(h1, h1) - _standardise(h2, reference)).mean())
+        h1, mean1, std1 = _sample_curvature(source, n_sample, random_state, r)
+        _, mean2, std2 = _sample_curvature(target, n_sample, random_state, r)
+        h2 = smoothed_curvature(target, mapping[sample], r)
+        total += float(np.abs((h1 - mean1) / std1 - (h2 - mean2) / std2).mean())
     return total / len(radii)
-
-
-def _standardise(values: np.ndarray, reference: np.ndarray) -> np.ndarray:
-    std = reference.std()
-    return (values - reference.mean()) / (std if std > 0 else 1.0)
 
 
 def _area_sample(mesh: Mesh, n: int, random_state: int | None) -> np.ndarray:
@@ -175,4 +170,14 @@ def _area_sample(mesh: Mesh, n: int, random_state: int | None) -> np.ndarray:
         else:
             rng = np.random.default_rng(random_state)
             mesh._cache[key] = np.sort(rng.choice(mesh.n_vertices, size=n, replace=False, p=mass / mass.sum()))
+    return mesh._cache[key]
+
+
+def _sample_curvature(mesh: Mesh, n: int, random_state: int | None, radius: float
+                      ) -> tuple[np.ndarray, float, float]:
+    """:func:`smoothed_curvature` on the mesh's :func:`_area_sample`, its mean and standard deviation; cached."""
+    key = ("sample_curvature", n, random_state, float(radius))
+    if key not in mesh._cache:
+        values = smoothed_curvature(mesh, _area_sample(mesh, n, random_state), radius)
+        mesh._cache[key] = (values, float(values.mean()), float(values.std()) or 1.0)
     return mesh._cache[key]

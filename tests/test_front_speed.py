@@ -55,21 +55,23 @@ def test_signed_volumes_equal_the_direct_sum_from_each_origin(creature_pair):
     assert np.ptp(volumes) > 0.1 * np.abs(volumes).max()  # the open case really differs
 
 
-def test_candidate_matching_reuses_no_stale_neighbours():
-    """The shared k-NN query of steps 6-7 is keyed on the arrays' contents: in-place edits are seen."""
+def test_shared_neighbours_give_the_same_anchors_and_map():
+    """Steps 6-7 may share one k-NN query (embedding_neighbours): same results as without it."""
     from scipy.spatial import cKDTree
 
-    from meshcorr.anchors import EXACT_PAIRS, proximity_matching, select_anchors
+    from meshcorr.anchors import EXACT_PAIRS, embedding_neighbours, proximity_matching, select_anchors
 
     rng = np.random.default_rng(0)
     X, Y = rng.normal(size=(2100, 5)), rng.normal(size=(2100, 5))
     assert len(X) * len(Y) > EXACT_PAIRS  # the candidate (KD-tree) path
+    rows = lambda i: np.linalg.norm(X - X[i], axis=1)  # noqa: E731
+    cols = lambda j: np.linalg.norm(Y - Y[j], axis=1)  # noqa: E731
+    shared = embedding_neighbours(X, Y)
+    assert shared[0].shape == shared[1].shape == (len(X), 16)
+    np.testing.assert_array_equal(select_anchors(X, Y, rows, cols, 2, neighbours=shared),
+                                  select_anchors(X, Y, rows, cols, 2))
     empty = np.zeros((len(X), 0))
-    for _ in range(2):
-        rows = lambda i: np.linalg.norm(X - X[i], axis=1)  # noqa: E731
-        select_anchors(X, Y, rows, lambda j: np.linalg.norm(Y - Y[j], axis=1), 2)
-        mapping, cost = proximity_matching(X, Y, empty, np.zeros((len(Y), 0)))
-        dist, expected = cKDTree(Y).query(X)
-        np.testing.assert_array_equal(mapping, expected)
-        np.testing.assert_allclose(cost, dist, rtol=1e-12)
-        Y[:] = rng.normal(size=Y.shape)  # same object and shape, new contents
+    mapping, cost = proximity_matching(X, Y, empty, np.zeros((len(Y), 0)), neighbours=shared)
+    dist, expected = cKDTree(Y).query(X)
+    np.testing.assert_array_equal(mapping, expected)
+    np.testing.assert_allclose(cost, dist, rtol=1e-12)

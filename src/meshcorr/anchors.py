@@ -40,7 +40,6 @@ The bijective option always needs the whole cost matrix.
 
 from __future__ import annotations
 
-import hashlib
 from typing import Callable
 
 import numpy as np
@@ -59,6 +58,8 @@ EXACT_PAIRS = 4_000_000
 
 #: Target candidates per source vertex in anchor selection beyond ``EXACT_PAIRS``.
 N_CANDIDATES = 16
+#: Distances and indices of nearest neighbours, ``(n1, k)`` each (:func:`embedding_neighbours`).
+Neighbours = tuple[np.ndarray, np.ndarray]
 
 
 def _blocks(n1: int, n2: int):
@@ -68,7 +69,7 @@ def _blocks(n1: int, n2: int):
 
 
 def select_anchors(X: np.ndarray, Y: np.ndarray, source_geodesics: RowsFn, target_geodesics: RowsFn,
-                   n_anchors: int = 3) -> np.ndarray:
+                   n_anchors: int = 3, *, neighbours: Neighbours | None = None) -> np.ndarray:
     """Choose spread-out, well-matched anchor pairs.
 
     Parameters
@@ -82,6 +83,9 @@ def select_anchors(X: np.ndarray, Y: np.ndarray, source_geodesics: RowsFn, targe
         every vertex of that mesh, ``(n,)``.
     n_anchors : int
         h, the number of anchor pairs.
+    neighbours : tuple of (n1, k) arrays, optional
+        :func:`embedding_neighbours` of ``X`` in ``Y`` if already computed
+        (used beyond ``EXACT_PAIRS`` pairs only).
 
     Returns
     -------
@@ -92,7 +96,8 @@ def select_anchors(X: np.ndarray, Y: np.ndarray, source_geodesics: RowsFn, targe
     """
     n1, n2 = len(X), len(Y)
     if n1 * n2 > EXACT_PAIRS:
-        return _select_anchors_candidates(X, Y, source_geodesics, target_geodesics, n_anchors)
+        return _select_anchors_candidates(X, Y, source_geodesics, target_geodesics, n_anchors,
+                                          neighbours if neighbours is not None else embedding_neighbours(X, Y))
     p1, p2 = np.zeros(n1), np.zeros(n2)
     anchors = np.empty((n_anchors, 2), dtype=np.int64)
     for l in range(n_anchors):
@@ -115,10 +120,10 @@ def select_anchors(X: np.ndarray, Y: np.ndarray, source_geodesics: RowsFn, targe
 
 
 def _select_anchors_candidates(X, Y, source_geodesics: RowsFn, target_geodesics: RowsFn,
-                               n_anchors: int) -> np.ndarray:
+                               n_anchors: int, neighbours: Neighbours) -> np.ndarray:
     """:func:`select_anchors` over each source vertex's nearest target vertices only."""
     n1 = len(X)
-    Z, J = _embedding_neighbours(X, Y, min(N_CANDIDATES, len(Y)))
+    Z, J = neighbours
     p1, p2 = np.zeros(n1), np.zeros(len(Y))
     used1, used2 = np.zeros(n1, dtype=bool), np.zeros(len(Y), dtype=bool)
     anchors = np.empty((n_anchors, 2), dtype=np.int64)
@@ -150,7 +155,8 @@ def _cost_block(X, Y, F1, F2, rows) -> np.ndarray:
 
 
 def proximity_matching(X: np.ndarray, Y: np.ndarray, F1: np.ndarray, F2: np.ndarray,
-                       *, bijective: bool = False) -> tuple[np.ndarray, np.ndarray]:
+                       *, bijective: bool = False, neighbours: Neighbours | None = None
+                       ) -> tuple[np.ndarray, np.ndarray]:
     """Final map from the embedding distance plus the anchor term.
 
     Parameters
@@ -187,7 +193,7 @@ def proximity_matching(X: np.ndarray, Y: np.ndarray, F1: np.ndarray, F2: np.ndar
         mapping[rows] = cols
         return mapping, C[np.arange(n1), mapping]
     if n1 * n2 > EXACT_PAIRS:
-        return _candidate_matching(X, Y, F1, F2)
+        return _candidate_matching(X, Y, F1, F2, neighbours if neighbours is not None else embedding_neighbours(X, Y))
     mapping = np.empty(n1, dtype=np.int64)
     cost = np.empty(n1)
     for rows in _blocks(n1, n2):
@@ -198,32 +204,29 @@ def proximity_matching(X: np.ndarray, Y: np.ndarray, F1: np.ndarray, F2: np.ndar
     return mapping, cost
 
 
-#: The last :func:`_embedding_neighbours` query, keyed on its inputs' contents.
-_LAST_NEIGHBOURS: dict = {}
+def embedding_neighbours(X: np.ndarray, Y: np.ndarray, k: int = N_CANDIDATES) -> Neighbours:
+    """The ``k`` nearest rows of ``Y`` to each row of ``X`` (KD-tree).
 
+    Parameters
+    ----------
+    X : (n1, d) float
+    Y : (n2, d) float
+    k : int
+        Clipped to ``n2``.
 
-def _embedding_neighbours(X: np.ndarray, Y: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
-    """Distances and indices of the ``k`` nearest rows of ``Y`` to each row of ``X``, ``(n1, k)`` each.
-
-    :func:`select_anchors` and :func:`proximity_matching` ask for the same
-    query in turn (the pipeline's steps 6 and 7; ~1 s at 115k vertices), so
-    the last result is kept, read-only, keyed on the arrays' shapes and a
-    hash of their bytes (never stale, whatever the caller does to its arrays).
+    Returns
+    -------
+    distances, indices : (n1, min(k, n2)) float and int
+        Both :func:`select_anchors` and :func:`proximity_matching` need this
+        query beyond ``EXACT_PAIRS`` pairs (~1 s at 115k vertices): compute it
+        once and pass it to both as ``neighbours``.
     """
-    X, Y = np.ascontiguousarray(X, dtype=np.float64), np.ascontiguousarray(Y, dtype=np.float64)
-    digest = hashlib.blake2b(X.tobytes(), digest_size=16)
-    digest.update(Y.tobytes())
-    key = (X.shape, Y.shape, int(k), digest.digest())
-    if _LAST_NEIGHBOURS.get("key") != key:
-        Z, J = cKDTree(Y).query(X, k=k, workers=-1)
-        Z, J = Z.reshape(len(X), -1), J.reshape(len(X), -1)
-        Z.flags.writeable = J.flags.writeable = False
-        _LAST_NEIGHBOURS.clear()
-        _LAST_NEIGHBOURS.update(key=key, value=(Z, J))
-    return _LAST_NEIGHBOURS["value"]
+    k = min(int(k), len(Y))
+    Z, J = cKDTree(Y).query(X, k=k, workers=-1)
+    return Z.reshape(len(X), k), J.reshape(len(X), k)
 
 
-def _candidate_matching(X, Y, F1, F2, *, k: int = N_CANDIDATES) -> tuple[np.ndarray, np.ndarray]:
+def _candidate_matching(X, Y, F1, F2, neighbours: Neighbours) -> tuple[np.ndarray, np.ndarray]:
     """Row-wise argmin of the matching cost over KD-tree candidates, without ``n1 x n2`` blocks.
 
     Candidates of source vertex i: its ``k`` nearest target points in the
@@ -235,8 +238,8 @@ def _candidate_matching(X, Y, F1, F2, *, k: int = N_CANDIDATES) -> tuple[np.ndar
     path. Without anchor terms the result is the exact argmin.
     """
     n1, n2 = len(X), len(Y)
-    k = min(k, n2)
-    nearest = _embedding_neighbours(X, Y, k)[1]
+    nearest = neighbours[1]
+    k = nearest.shape[1]
     combined = None
     if F1.size:
         combined = (cKDTree(np.hstack([Y, F2])), np.hstack([X, F1]), max(1, k // 2))

@@ -22,7 +22,7 @@ import warnings
 import numpy as np
 
 from ._params import check_choice, check_float, check_int
-from .anchors import anchor_descriptors, proximity_matching, select_anchors
+from .anchors import EXACT_PAIRS, anchor_descriptors, embedding_neighbours, proximity_matching, select_anchors
 from .curvature import curvature_disagreement
 from .errors import MeshWarning, ParameterError
 from .geodesics import GEODESIC_METHODS
@@ -285,14 +285,17 @@ def _finish(candidate: Candidate, X: np.ndarray, Y: np.ndarray, spectra, *, n_an
     """
     warped = candidate.extra["icp"].warped
     g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
-    anchors = select_anchors(X, warped, g1, g2, n_anchors)
+    # Beyond EXACT_PAIRS both steps search each source point's nearest embedded target points.
+    neighbours = embedding_neighbours(X, warped) if len(X) * len(warped) > EXACT_PAIRS else None
+    anchors = select_anchors(X, warped, g1, g2, n_anchors, neighbours=neighbours)
     F1 = anchor_descriptors(anchors[:, 0], g1, np.ones(n_anchors))
     F2 = anchor_descriptors(anchors[:, 1], g2, np.ones(n_anchors))
     scale = anchor_weight
     if anchor_scale == "embedding" and n_anchors > 0:
         mean_geodesic = 0.5 * (F1.mean() + F2.mean())
         scale *= mean_pairwise_distance(X) / (n_anchors * max(mean_geodesic, 1e-12))
-    mapping, cost = proximity_matching(X, warped, F1 * scale, F2 * scale, bijective=bijective)
+    mapping, cost = proximity_matching(X, warped, F1 * scale, F2 * scale, bijective=bijective,
+                                       neighbours=neighbours)
     candidate.mapping = mapping
     candidate.extra.update(anchors=anchors, cost=cost)
 

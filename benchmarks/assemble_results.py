@@ -8,12 +8,14 @@ concatenates them under one index so every result is in one place.
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-ORDER = ["core", "baselines", "evaluation", "scale", "symmetry", "viz"]
+ORDER = ["core", "baselines", "evaluation", "scale", "front", "refine", "symmetry", "viz"]
 TITLES = {
     "core": "Core dense pipeline on TOSCA (issue 2)",
     "baselines": "The paper's baselines vs spectral (issue 3)",
     "evaluation": "Evaluation, benchmark and the paper's experiments (issue 3)",
     "scale": "Scale and speed (issue 5)",
+    "front": "Speed of the stages before the refinement, old vs new (issue 5)",
+    "refine": "Speed of the ZoomOut refinement, old vs new (issue 5)",
     "symmetry": "Left/right mirror and refinement (issue 6)",
     "viz": "Pictures and report (issue 4)",
 }

@@ -276,6 +276,7 @@ def test_mirror_option_gives_the_other_side(results, pair):
     assert summary["params"]["symmetry"] == "mirror"
     assert [c["chosen"] for c in summary["candidates"]].count(True) == 1
     assert all(0.0 <= c["orientation"] <= 1.0 for c in summary["candidates"])
+    assert all(0.0 <= c["curvature"] < 2.0 and c["distortion"] is None for c in summary["candidates"])
 
 
 def test_open_mesh_warns_that_orientation_is_unreliable():
@@ -288,6 +289,7 @@ def test_open_mesh_warns_that_orientation_is_unreliable():
         result = meshcorr.match(flat, flat, refine=False, reorder="signs")
     assert result.orientation_reliable is False
     assert any(issubclass(w.category, MeshWarning) and "orientation" in str(w.message) for w in caught)
+    assert all(c["distortion"] is not None for c in result.candidates)  # distortion decides here
 
 
 @pytest.mark.parametrize("kwargs, message", [

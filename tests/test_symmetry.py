@@ -18,7 +18,7 @@ from meshcorr.errors import MeshWarning, ParameterError
 from meshcorr.mesh import Mesh
 from meshcorr.orientation import orient_outward, orientation_score, vertex_normals
 from meshcorr.reorder import Configuration
-from meshcorr.symmetry import Candidate, candidate_ranks, choose, metric_distortion
+from meshcorr.symmetry import Candidate, candidate_ranks, choose, metric_distortion, right_map_missing
 
 
 def creature(subdivisions: int = 3):
@@ -191,6 +191,17 @@ def test_unreliable_orientation_falls_back_to_distortion():
     assert chosen is b and other is a
 
 
+def test_right_map_missing_when_preserving_candidates_agree_worse():
+    mirror, half_turn = _candidate(0, 0.1, 0.36), _candidate(1, 0.9, 0.44)
+    assert right_map_missing([mirror, half_turn])  # 0.44 > 1.15 x 0.36
+    assert not right_map_missing([mirror, half_turn, _candidate(4, 0.9, 0.34)])
+    assert not right_map_missing([mirror, _candidate(1, 0.9, 0.40)])  # within 15 %
+    assert right_map_missing([mirror])  # nothing preserves orientation
+    assert not right_map_missing([half_turn])  # nothing to compare with
+    with pytest.raises(ParameterError, match="'ratio' parameter"):
+        right_map_missing([mirror], ratio=0.5)
+
+
 def test_choose_errors():
     with pytest.raises(ParameterError, match="'symmetry' parameter must be one of"):
         choose([_candidate(0, 1.0, 0.0)], "left")
@@ -277,6 +288,22 @@ def test_mirror_option_gives_the_other_side(results, pair):
     assert [c["chosen"] for c in summary["candidates"]].count(True) == 1
     assert all(0.0 <= c["orientation"] <= 1.0 for c in summary["candidates"])
     assert all(0.0 <= c["curvature"] < 2.0 and c["distortion"] is None for c in summary["candidates"])
+
+
+@pytest.mark.parametrize("only", [0, 1])
+def test_candidates_are_widened_when_the_right_map_is_missing(pair, monkeypatch, only):
+    # Score a single near-tied configuration: rank 0 or 1, one of which is the mirror
+    # image. With the mirror alone no candidate preserves orientation, so the pipeline
+    # must widen the set and still find the right side.
+    import meshcorr.pipeline as pipeline
+
+    src, tgt, truth, mirror = pair
+    monkeypatch.setattr(pipeline, "candidate_ranks", lambda configurations: [only])
+    result = meshcorr.match(src, tgt, refine=False)
+    scale = np.sqrt(tgt.area)
+    assert mean_distance(tgt, result.map, truth) / scale < 0.05
+    widened = len(result.candidates) == 6
+    assert widened == (result.candidates[0]["orientation"] < 0.5)
 
 
 def test_open_mesh_warns_that_orientation_is_unreliable():

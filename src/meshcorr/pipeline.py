@@ -33,7 +33,8 @@ from .orientation import mesh_orientation, orientation_score
 from .refine import refine_map
 from .reorder import REORDER_MODES, Configuration, rank_configurations
 from .result import Correspondence
-from .symmetry import SYMMETRY_MODES, Candidate, candidate_ranks, choose, metric_distortion
+from .symmetry import (SYMMETRY_MODES, WIDE_CANDIDATES, Candidate, candidate_ranks, choose, metric_distortion,
+                       right_map_missing)
 from .timing import StageProgress, StageTimer
 from .tps import mean_pairwise_distance
 
@@ -239,30 +240,38 @@ def _score_candidates(src: Mesh, tgt: Mesh, spectra, configurations: list[Config
 
     The scores use each candidate's TPS-ICP nearest-neighbour map: the
     anchors and the refinement only run for the chosen map and its
-    alternative (:func:`_finish`). The metric distortion (single-source
+    alternative (:func:`_finish`). When the near-tied set seems to lack the
+    right map (:func:`meshcorr.symmetry.right_map_missing`), the cheapest
+    ``WIDE_CANDIDATES`` configurations are scored. The metric distortion (single-source
     geodesic solves, the costliest score at 100k vertices) is measured only
     when the orientation is unreliable, the one case where it decides.
     """
     X, Y = spectra[0].embedding, spectra[1].embedding
     g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
-    rng = np.random.default_rng(options["random_state"])
+    seed = options["random_state"]
+    rng = np.random.default_rng(seed)
     sources = rng.choice(len(X), size=min(N_DISTORTION_SOURCES, len(X)), replace=False)
     source_rows: dict = {}
-    candidates = []
-    for rank in candidate_ranks(configurations):
+
+    def score(rank: int) -> Candidate:
         configuration = configurations[rank]
         with timer.stage("icp"):
             icp = _align(X, configuration.apply(Y), **options)
         with timer.stage("symmetry"):
-            seed = options["random_state"]
-            candidates.append(Candidate(
+            return Candidate(
                 rank=rank, configuration=configuration,
                 orientation=orientation_score(src, tgt, icp.matches, random_state=seed),
                 curvature=curvature_disagreement(src, tgt, icp.matches, random_state=seed),
                 distortion=(np.nan if reliable else
                             metric_distortion(g1, g2, icp.matches, sources, source_rows)),
                 mapping=icp.matches, extra={"icp": icp, "anchors": np.zeros((0, 2), dtype=np.int64),
-                                            "cost": None}))
+                                            "cost": None})
+
+    ranks = candidate_ranks(configurations)
+    candidates = [score(rank) for rank in ranks]
+    if reliable and right_map_missing(candidates):
+        candidates += [score(rank) for rank in range(min(WIDE_CANDIDATES, len(configurations)))
+                       if rank not in ranks]
     return candidates
 
 

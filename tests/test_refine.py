@@ -1,5 +1,7 @@
 """ZoomOut refinement: it lowers the error of a noisy map and keeps its orientation."""
 
+import os
+
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
@@ -138,3 +140,56 @@ def test_zoomout_prunes_above_the_threshold_with_the_same_map(poses, monkeypatch
     monkeypatch.setattr(refine_module, "PRUNE_ABOVE", 10)
     pruned, _ = refine_map(rest, bent, start, k=20)
     np.testing.assert_array_equal(pruned, brute)
+
+
+
+
+_OVERLAPPING_REFINE = """
+import json, threading, time
+from threadpoolctl import threadpool_info
+import meshcorr.refine as refine
+from meshcorr import datasets as ds
+from meshcorr.mesh import Mesh
+
+real_eigsh, lock, barrier, entered = refine.eigsh, threading.Lock(), threading.Barrier(2), []
+
+def overlapping_eigsh(*args, **kwargs):
+    with lock:
+        entered.append(threading.get_ident())
+    barrier.wait(timeout=10)
+    if entered.index(threading.get_ident()) == 1:
+        time.sleep(0.1)
+    return real_eigsh(*args, **kwargs)
+
+def counts():
+    return sorted(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas")
+
+refine.eigsh = overlapping_eigsh
+shape = ds.figure(resolution=1)
+source, target = Mesh(shape.vertices, shape.faces), Mesh(shape.vertices, shape.faces)
+before = counts()
+refine.refine_map(source, target, list(range(source.n_vertices)), k=12)
+print(json.dumps({"before": before, "after": counts()}))
+"""
+
+
+def test_refinement_restores_the_blas_thread_count():
+    """Both eigenproblems run in threads under a process-wide BLAS limit: the count must come back.
+
+    In a fresh interpreter (threadpoolctl lets only the first thread that
+    limits OpenBLAS change it while that thread lives), with the eigensolver
+    made to overlap in the two threads and the thread that entered second
+    to leave last: limits set only inside each thread left BLAS at one
+    thread for the rest of the process.
+    """
+    import json
+    import subprocess
+    import sys
+
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="2", OMP_NUM_THREADS="2")
+    out = subprocess.run([sys.executable, "-c", _OVERLAPPING_REFINE], capture_output=True, text=True,
+                         env=env, timeout=120, check=True).stdout
+    counts = json.loads(out)
+    if max(counts["before"]) < 2:
+        pytest.skip("BLAS runs one thread here: nothing to restore")
+    assert counts["after"] == counts["before"]

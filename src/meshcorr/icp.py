@@ -19,9 +19,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
-from threadpoolctl import threadpool_limits
 
 from ._params import check_float, check_int
+from ._threads import single_blas_thread
 from .tps import fit_tps, mean_pairwise_distance
 
 
@@ -108,7 +108,7 @@ def tps_icp(X: np.ndarray, Y: np.ndarray, *, max_iter: int = 10, n_control: int 
     rng = np.random.default_rng(random_state)
     # Small dense solves and products: threaded BLAS only adds synchronisation
     # (3-10x slower on a loaded 2-core machine).
-    with threadpool_limits(limits=1, user_api="blas"):
+    with single_blas_thread():
         if max(len(X), len(Y)) > max_points:
             return _subset_icp(X, Y, rng, max_iter=max_iter, n_control=n_control, anneal=anneal,
                                tol=tol, rtol=rtol, max_points=max_points, random_state=random_state)

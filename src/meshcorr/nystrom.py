@@ -33,9 +33,9 @@ The eigenvalues approximate those of the full ``n x n`` matrix (not of
 from __future__ import annotations
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
 from ._params import check_float, check_int
+from ._threads import single_blas_thread
 from .embedding import sign_convention
 from .errors import ParameterError
 from .geodesics import geodesic_solver
@@ -78,7 +78,7 @@ def nystrom_eigenpairs(landmarks: np.ndarray, distances: np.ndarray, sigma: floa
     rcond = check_float("rcond", rcond, minimum=0.0, exclusive=True, maximum=1.0)
     if not np.isfinite(sigma) or sigma <= 0:
         raise ParameterError(f"The Gaussian width sigma must be a positive number. Got {sigma!r} instead.")
-    with threadpool_limits(limits=1, user_api="blas"):  # small products: threads only add waits
+    with single_blas_thread():  # small products: threads only add waits
         return _nystrom(landmarks, distances, sigma, k, rcond)
 
 

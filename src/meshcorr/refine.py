@@ -51,9 +51,9 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import linear_sum_assignment
 from scipy.sparse.linalg import eigsh
-from threadpoolctl import threadpool_limits
 
 from ._params import check_int
+from ._threads import single_blas_thread
 from .embedding import deterministic_start, sign_convention
 from .errors import ParameterError
 from .mesh import Mesh
@@ -100,7 +100,7 @@ def laplace_basis(mesh: Mesh, k: int, *, random_state: int | None = 0) -> tuple[
         shift = -1e-8 * float(np.abs(L.diagonal()).mean() / mass.mean())
         # ARPACK's reorthogonalisation is memory-bound BLAS-2: threads only add
         # waits (measured 2x slower with 2 threads on a loaded 2-core machine).
-        with threadpool_limits(limits=1, user_api="blas"):
+        with single_blas_thread():
             values, vectors = eigsh(L.tocsc(), k=k, M=sp.diags(mass).tocsc(), sigma=shift, which="LM",
                                     v0=deterministic_start(n, random_state))
         order = np.argsort(values)
@@ -110,6 +110,10 @@ def laplace_basis(mesh: Mesh, k: int, *, random_state: int | None = 0) -> tuple[
     return mesh._cache[key]
 
 
+#: Squared distances per block of :func:`_nearest_rows` (8 MB of float64).
+_NEAREST_BLOCK = 1 << 20
+
+
 def _nearest_rows(queries: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Index of the nearest row of ``points`` for each row of ``queries``.
 
@@ -117,11 +121,17 @@ def _nearest_rows(queries: np.ndarray, points: np.ndarray) -> np.ndarray:
     dimensions of a spectral basis.
     """
     sq = np.einsum("ij,ij->i", points, points)
+    minus_2t = -2.0 * points.T
     out = np.empty(len(queries), dtype=np.int64)
-    step = max(1, 4_000_000 // max(1, len(points)))
+    step = max(1, min(len(queries), _NEAREST_BLOCK // max(1, len(points))))
+    # One buffer for every block: fresh 30 MB temporaries per block cost as
+    # much in page faults as the products themselves (measured at 5k).
+    buffer = np.empty((step, len(points)))
     for start in range(0, len(queries), step):
         block = queries[start:start + step]
-        out[start:start + step] = np.argmin(sq[None, :] - 2.0 * block @ points.T, axis=1)
+        dist = np.matmul(block, minus_2t, out=buffer[:len(block)])
+        dist += sq
+        out[start:start + step] = np.argmin(dist, axis=1)
     return out
 
 
@@ -275,7 +285,9 @@ def refine_map(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40, 
                              f"per source vertex ({source.n_vertices}). Got shape {mapping.shape}.")
     # The two eigenproblems are independent and SuperLU's solves release the
     # GIL: two threads take ~1.5x less wall time on 2 cores (same results).
-    with ThreadPoolExecutor(max_workers=2) as pool:
+    # The BLAS limit is process-wide: held here around both threads, so that
+    # neither thread's limiter can restore the other's limit (meshcorr._threads).
+    with single_blas_thread(), ThreadPoolExecutor(max_workers=2) as pool:
         phi1, phi2 = pool.map(lambda mesh: laplace_basis(mesh, k, random_state=random_state)[1],
                               (source, target))
     return zoomout(phi1, phi2, mapping, k_start=min(k_start, k), step=step, n_sample=n_sample,

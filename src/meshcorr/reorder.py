@@ -40,9 +40,9 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial import cKDTree
-from threadpoolctl import threadpool_limits
 
 from ._params import check_choice, check_int
+from ._threads import single_blas_thread
 
 REORDER_MODES = ("exhaustive", "greedy", "signs", "signs-greedy", "none")
 
@@ -143,7 +143,7 @@ def _brute_costs(Xs: np.ndarray, targets: np.ndarray, configs: list[tuple[tuple,
     minus_2t = -2.0 * targets.T
     costs = np.empty(len(configs))
     chunk = max(1, _BRUTE_BLOCK // max(1, n * len(targets)))
-    with threadpool_limits(limits=1, user_api="blas"):  # small products: threads only add waits
+    with single_blas_thread():  # small products: threads only add waits
         for start in range(0, len(configs), chunk):
             block = configs[start:start + chunk]
             sq = _configured_queries(Xs, block) @ minus_2t

@@ -57,9 +57,9 @@ from typing import Callable
 import numpy as np
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
-from threadpoolctl import threadpool_limits
 
 from .._params import check_float, check_int
+from .._threads import single_blas_thread
 from ..mesh import MeshLike
 from ..result import Correspondence
 from ..timing import StageProgress, StageTimer
@@ -244,7 +244,7 @@ def tps_rpm(V: np.ndarray, X: np.ndarray, *, lambda_init: float = 1.0, affine_in
     out_row = np.sum((X - V.mean(axis=0)) ** 2, axis=1)
     x_bar = X.mean(axis=0)
     # Many small dense solves: BLAS threads only add overhead (10x slower on a busy 2-core machine).
-    with threadpool_limits(limits=1, user_api="blas"):
+    with single_blas_thread():
         while True:
             smoothing, affine_smoothing = lambda_init * K * T, affine_init * K * T
             for _ in range(inner_iterations):

@@ -1,6 +1,9 @@
 """ZoomOut refinement: it lowers the error of a noisy map and keeps its orientation."""
 
+import json
 import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -142,8 +145,6 @@ def test_zoomout_prunes_above_the_threshold_with_the_same_map(poses, monkeypatch
     np.testing.assert_array_equal(pruned, brute)
 
 
-
-
 _OVERLAPPING_REFINE = """
 import json, threading, time
 from threadpoolctl import threadpool_info
@@ -182,10 +183,6 @@ def test_refinement_restores_the_blas_thread_count():
     to leave last: limits set only inside each thread left BLAS at one
     thread for the rest of the process.
     """
-    import json
-    import subprocess
-    import sys
-
     env = dict(os.environ, OPENBLAS_NUM_THREADS="2", OMP_NUM_THREADS="2")
     out = subprocess.run([sys.executable, "-c", _OVERLAPPING_REFINE], capture_output=True, text=True,
                          env=env, timeout=120, check=True).stdout

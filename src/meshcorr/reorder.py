@@ -118,8 +118,41 @@ def _batched_costs(Xs: np.ndarray, tree: cKDTree, configs: list[tuple[tuple, tup
     return costs
 
 
+#: Marginal pre-screen: configurations kept when there are more (see :func:`_marginal_costs`).
+_MARGINAL_KEEP = 768
+#: Quantile levels at which the marginals are compared.
+_QUANTILES = np.linspace(0.005, 0.995, 199)
 #: Coarse pass: (source points, target points, configurations kept) when there are more.
-_COARSE = (48, 256, 256)
+_COARSE = (48, 256, 64)
+
+
+def _marginal_costs(X: np.ndarray, Y: np.ndarray, configs: list[tuple[tuple, tuple]]) -> np.ndarray:
+    """A cheap proxy of each configuration's cost: how far apart the coordinates' distributions are.
+
+    .. math::
+
+        \\tilde c(\\pi, s) = \\sum_c \\int_0^1 \\lvert F^{-1}_{X_c}(q) - F^{-1}_{s_c Y_{\\pi(c)}}(q) \\rvert \\, dq
+
+    the sum over dimensions of the 1-d Wasserstein distance between the source
+    coordinate and the configured target coordinate (quantile form, at
+    :data:`_QUANTILES`). The embedding is intrinsic, so under the right
+    configuration each coordinate is distributed alike on both shapes; the
+    proxy cannot tell a coordinate from its mirror when it is symmetric
+    (those configurations tie and are kept together). It costs a ``d x d x 2``
+    table, against one nearest-neighbour search per configuration for the
+    true cost. Measured on 40 stratified TOSCA 5k pairs: the true 6
+    cheapest configurations all rank within the proxy's first 233 of 3840
+    (within 108 on 39 pairs); :data:`_MARGINAL_KEEP` keeps 768.
+    """
+    d = X.shape[1]
+    qx = np.quantile(X, _QUANTILES, axis=0)
+    qy = np.quantile(Y, _QUANTILES, axis=0)
+    qy_flipped = -qy[::-1]  # quantiles of -Y (the levels are symmetric about 1/2)
+    table = np.stack([np.abs(qx[:, :, None] - qy[:, None, :]).mean(axis=0),
+                      np.abs(qx[:, :, None] - qy_flipped[:, None, :]).mean(axis=0)], axis=-1)
+    perms = np.asarray([p for p, _ in configs], dtype=np.int64)
+    flipped = np.asarray([s for _, s in configs]) < 0
+    return table[np.arange(d), perms, flipped.astype(np.int64)].sum(axis=1)
 
 
 #: Squared distances per block of :func:`_brute_costs` (~2 MB of float64: stays in cache).
@@ -132,22 +165,23 @@ def _brute_costs(Xs: np.ndarray, targets: np.ndarray, configs: list[tuple[tuple,
     Nearest-neighbour distances from the expansion
     :math:`\\lVert q - y \\rVert^2 = \\lVert q \\rVert^2 + \\lVert y \\rVert^2 - 2 q \\cdot y`
     (a signed permutation keeps :math:`\\lVert q \\rVert = \\lVert x \\rVert`), one matrix
-    product per block of configurations. Hand-written rather than a KD-tree: most
-    configurations put the queries far from the target points, where a KD-tree
-    query visits most of the tree; on TOSCA cat0/cat1 (48 x 256 points, 3840
+    product per block of configurations, with :math:`\\lVert y \\rVert^2` folded into the
+    product as an extra coordinate (one pass over the block fewer: ~1.5x faster). Hand-written
+    rather than a KD-tree: most configurations put the queries far from the target points,
+    where a KD-tree query visits most of the tree; on TOSCA cat0/cat1 (48 x 256 points, 3840
     configurations) this is ~3x faster, and equal to ~1e-16.
     """
     n = len(Xs)
-    tt = np.einsum("ij,ij->i", targets, targets)
     xx = np.einsum("ij,ij->i", Xs, Xs)
-    minus_2t = -2.0 * targets.T
+    # [q, 1] @ [[-2 y^T], [||y||^2]] = ||y||^2 - 2 q.y
+    augmented = np.vstack([-2.0 * targets.T, np.einsum("ij,ij->i", targets, targets)])
     costs = np.empty(len(configs))
     chunk = max(1, _BRUTE_BLOCK // max(1, n * len(targets)))
     with single_blas_thread():  # small products: threads only add waits
         for start in range(0, len(configs), chunk):
             block = configs[start:start + chunk]
-            sq = _configured_queries(Xs, block) @ minus_2t
-            sq += tt
+            queries = _configured_queries(Xs, block)
+            sq = np.hstack([queries, np.ones((len(queries), 1))]) @ augmented
             nearest = sq.min(axis=1).reshape(len(block), n) + xx
             costs[start:start + len(block)] = np.sqrt(np.maximum(nearest, 0.0)).mean(axis=1)
     return costs
@@ -166,9 +200,11 @@ def _rank(X, Y, configs, n_sample, n_rescore, n_score, rng, chosen=None) -> list
 
     Wrong configurations put the queries far from the target, where KD-tree
     queries are slow, so the configurations are whittled down on growing
-    random subsets, scored by brute force (:func:`_brute_costs`): a coarse
-    pass (48 source against 256 target points) keeps the best 256, a second
-    pass (``n_sample`` source points against ``2 * n_sample``, at least 1000,
+    random subsets, scored by brute force (:func:`_brute_costs`), after a
+    pre-screen of the distributions of single coordinates
+    (:func:`_marginal_costs`) keeps the best 768: a coarse pass (48 source
+    against 256 target points) keeps the best 64, a second pass
+    (``n_sample`` source points against ``2 * n_sample``, at least 1000,
     target points) the best ``n_rescore``;
     those are scored on all points, or for larger meshes on seeded samples
     of ``n_score`` source and ``n_score`` target points (KD-tree queries far
@@ -176,12 +212,16 @@ def _rank(X, Y, configs, n_sample, n_rescore, n_score, rng, chosen=None) -> list
     ~0.3 ms at 115k, before the alignment brings the two clouds together).
     Measured on TOSCA cat0/cat1 (5 seeds): the true top 4 of 3840 rank
     first to fourth in the coarse pass and the true top 16 within its first
-    28-132 (of 256 kept); the second pass on its own ranks the true top 10
-    within its first 21. ``chosen`` (a heuristic's pick) is put first whatever its
+    28-132; the second pass on its own ranks the true top 10 within its
+    first 21. On 40 stratified TOSCA 5k pairs the 6 first configurations
+    and their order are the same as without the pre-screen and with 256
+    kept by the coarse pass. ``chosen`` (a heuristic's pick) is put first whatever its
     cost; the others follow in ascending cost.
     """
     configs = list(dict.fromkeys(configs))  # de-duplicate, keep order
     n_coarse_source, n_coarse_target, n_coarse_keep = _COARSE
+    if len(X) > n_coarse_source and len(configs) > _MARGINAL_KEEP:
+        configs = [configs[i] for i in np.argsort(_marginal_costs(X, Y, configs), kind="stable")[:_MARGINAL_KEEP]]
     if len(X) > n_coarse_source and len(configs) > max(n_coarse_keep, n_rescore):
         configs = _prescore(X, Y, configs, n_coarse_source, n_coarse_target, max(n_coarse_keep, n_rescore), rng)
     if len(X) > n_sample and len(configs) > n_rescore:

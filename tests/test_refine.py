@@ -4,6 +4,7 @@ import json
 import os
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -14,7 +15,7 @@ from meshcorr import datasets as ds
 from meshcorr.errors import ParameterError
 from meshcorr.mesh import Mesh
 from meshcorr.orientation import orientation_score
-from meshcorr.refine import laplace_basis, refine_map, zoomout
+from meshcorr.refine import laplace_basis, prefetch_bases, refine_map, zoomout
 
 
 @pytest.fixture(scope="module")
@@ -185,6 +186,74 @@ def test_refinement_restores_the_blas_thread_count():
     """
     env = dict(os.environ, OPENBLAS_NUM_THREADS="2", OMP_NUM_THREADS="2")
     out = subprocess.run([sys.executable, "-c", _OVERLAPPING_REFINE], capture_output=True, text=True,
+                         env=env, timeout=120, check=True).stdout
+    counts = json.loads(out)
+    if max(counts["before"]) < 2:
+        pytest.skip("BLAS runs one thread here: nothing to restore")
+    assert counts["after"] == counts["before"]
+
+
+def test_prefetched_bases_are_the_ones_computed_directly(poses):
+    """The worker thread caches exactly what laplace_basis computes in the caller's thread."""
+    fresh = [Mesh(m.vertices, m.faces) for m in poses]
+    with prefetch_bases(*fresh, 12, random_state=3) as prefetch:
+        pass  # leaving the block waits for the worker
+    assert prefetch.seconds is not None and prefetch.seconds > 0
+    for mesh, cached in zip(poses, fresh):
+        direct = laplace_basis(Mesh(mesh.vertices, mesh.faces), 12, random_state=3)
+        prefetched = cached._cache[("laplace_basis", 12, 3)]
+        np.testing.assert_array_equal(prefetched[0], direct[0])
+        np.testing.assert_array_equal(prefetched[1], direct[1])
+
+
+def test_prefetch_reraises_the_worker_error_and_does_not_wait_after_an_error(poses, monkeypatch):
+    import meshcorr.refine as refine
+
+    def failing(mesh, k, random_state=0):
+        raise ParameterError("basis failed")
+
+    monkeypatch.setattr(refine, "laplace_basis", failing)
+    with pytest.raises(ParameterError, match="basis failed"):
+        with prefetch_bases(*poses, 12):
+            pass
+
+    def slow(mesh, k, random_state=0):
+        time.sleep(3.0)
+
+    monkeypatch.setattr(refine, "laplace_basis", slow)
+    start = time.perf_counter()
+    with pytest.raises(RuntimeError, match="stage failed"):
+        with prefetch_bases(*poses, 12):
+            raise RuntimeError("stage failed")
+    assert time.perf_counter() - start < 1.5  # the 3 s worker was left to finish on its own
+
+
+def test_match_reports_the_background_basis_time(poses):
+    result = meshcorr.match(*poses, refine_k=12)
+    assert result.timings["refine_bases"] > 0
+    assert "refine_bases" not in meshcorr.match(*poses, refine=False).timings
+
+
+_MATCH_BLAS = """
+import json
+from threadpoolctl import threadpool_info
+import meshcorr
+from meshcorr import datasets as ds
+
+def counts():
+    return sorted(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas")
+
+shape = ds.figure(resolution=1)
+before = counts()
+meshcorr.match((shape.vertices, shape.faces), (shape.vertices, shape.faces), refine_k=12)
+print(json.dumps({"before": before, "after": counts()}))
+"""
+
+
+def test_match_restores_the_blas_thread_count():
+    """match() limits BLAS to one thread while the bases compute in the background, then restores it."""
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="2", OMP_NUM_THREADS="2")
+    out = subprocess.run([sys.executable, "-c", _MATCH_BLAS], capture_output=True, text=True,
                          env=env, timeout=120, check=True).stdout
     counts = json.loads(out)
     if max(counts["before"]) < 2:

@@ -30,7 +30,7 @@ from .icp import tps_icp
 from .mesh import Mesh, MeshLike, as_mesh
 from .modes import MODES, N_LANDMARKS, SCALABLE_ABOVE, build_spectrum, resolve_memory, select_mode
 from .orientation import mesh_orientation, orientation_score
-from .refine import refine_map
+from .refine import prefetch_bases, refine_map
 from .reorder import REORDER_MODES, Configuration, rank_configurations
 from .result import Correspondence
 from .symmetry import (SYMMETRY_MODES, WIDE_CANDIDATES, Candidate, candidate_ranks, choose, metric_distortion,
@@ -160,36 +160,44 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
         tgt = as_mesh(target, name="target", largest_component=largest_component,
                       min_vertices=k + 2, reason=why)
 
-    # Steps 1-3: geodesic distances, Gaussian affinities, scaled spectral embedding.
     mode = select_mode(mode, src.n_vertices, tgt.n_vertices, max_memory=max_memory,
                        scalable_above=scalable_above, bijective=bijective)
-    spectra = [build_spectrum(mesh, mode, k=k, geodesic=geodesic, scale=scale_eigenvalues,
-                              n_landmarks=n_landmarks, random_state=random_state, timer=timer)
-               for mesh in (src, tgt)]
-    X, Y = spectra[0].embedding, spectra[1].embedding
+    # The refinement's Laplace-Beltrami bases depend on the meshes only: a worker
+    # thread computes them while steps 1-7 run (meshcorr.refine.prefetch_bases).
+    with prefetch_bases(src, tgt, refine_k, random_state=random_state, enabled=refine) as bases:
+        # Steps 1-3: geodesic distances, Gaussian affinities, scaled spectral embedding.
+        spectra = [build_spectrum(mesh, mode, k=k, geodesic=geodesic, scale=scale_eigenvalues,
+                                  n_landmarks=n_landmarks, random_state=random_state, timer=timer)
+                   for mesh in (src, tgt)]
+        X, Y = spectra[0].embedding, spectra[1].embedding
 
-    # Step 4: eigenvector reordering and sign correction.
-    with timer.stage("reorder"):
-        configurations = rank_configurations(X, Y, reorder, random_state=random_state)
+        # Step 4: eigenvector reordering and sign correction.
+        with timer.stage("reorder"):
+            configurations = rank_configurations(X, Y, reorder, random_state=random_state)
 
-    # Steps 5-7 for each near-tied configuration; the left/right mirror is
-    # resolved by the orientation of each candidate's map (meshcorr.symmetry).
-    options = dict(icp_iterations=icp_iterations, n_control=n_control, anneal=anneal,
-                   n_anchors=n_anchors, anchor_weight=anchor_weight, anchor_scale=anchor_scale,
-                   bijective=bijective, random_state=random_state)
-    with timer.stage("symmetry"):
-        reliable = mesh_orientation(src).reliable and mesh_orientation(tgt).reliable
-    candidates = _score_candidates(src, tgt, spectra, configurations, timer, options, reliable=reliable)
-    chosen, other = choose(candidates, symmetry, orientation_reliable=reliable)
-    if not reliable and symmetry == "auto" and len(candidates) > 1:
-        why = mesh_orientation(src).reason or mesh_orientation(tgt).reason
-        warnings.warn(f"The left/right orientation cannot be checked: {why}. The map may be the mirror "
-                      "image of the right one; compare it with result.alternative_map.", MeshWarning,
-                      stacklevel=2)
-    with timer.stage("matching"):
-        for candidate in (chosen, other):
-            if candidate is not None:
-                _finish(candidate, X, Y, spectra, **options)
+        # Steps 5-7 for each near-tied configuration; the left/right mirror is
+        # resolved by the orientation of each candidate's map (meshcorr.symmetry).
+        options = dict(icp_iterations=icp_iterations, n_control=n_control, anneal=anneal,
+                       n_anchors=n_anchors, anchor_weight=anchor_weight, anchor_scale=anchor_scale,
+                       bijective=bijective, random_state=random_state)
+        with timer.stage("symmetry"):
+            reliable = mesh_orientation(src).reliable and mesh_orientation(tgt).reliable
+        candidates = _score_candidates(src, tgt, spectra, configurations, timer, options, reliable=reliable)
+        chosen, other = choose(candidates, symmetry, orientation_reliable=reliable)
+        if not reliable and symmetry == "auto" and len(candidates) > 1:
+            why = mesh_orientation(src).reason or mesh_orientation(tgt).reason
+            warnings.warn(f"The left/right orientation cannot be checked: {why}. The map may be the mirror "
+                          "image of the right one; compare it with result.alternative_map.", MeshWarning,
+                          stacklevel=2)
+        with timer.stage("matching"):
+            for candidate in (chosen, other):
+                if candidate is not None:
+                    _finish(candidate, X, Y, spectra, **options)
+        if refine:
+            with timer.stage("refine"):
+                bases.wait()
+    if bases.seconds is not None:
+        timer.timings["refine_bases"] = bases.seconds
     refine_history: list = []
     if refine:  # the chosen map only: the alternative is kept as proximity matching gave it
         with timer.stage("refine"):

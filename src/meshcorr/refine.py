@@ -45,7 +45,10 @@ memory-bound, and threads only add waits on a shared 2-core machine.
 
 from __future__ import annotations
 
+import threading
+import time
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 
 import numpy as np
 import scipy.sparse as sp
@@ -256,6 +259,92 @@ def zoomout(source_basis: np.ndarray, target_basis: np.ndarray, mapping: np.ndar
     return _nearest_rows(queries, target_basis), history
 
 
+def _basis_size(k: int, source: Mesh, target: Mesh) -> int:
+    """The basis size both meshes use: ``k`` clipped to the vertex counts."""
+    k = check_int("refine_k", k, minimum=2)
+    return min(k, source.n_vertices - 1, target.n_vertices - 1)
+
+
+class BasisPrefetch:
+    """Laplace-Beltrami bases being computed in a worker thread (see :func:`prefetch_bases`).
+
+    Attributes
+    ----------
+    seconds : float or None
+        Wall time the worker took, once it has finished.
+    """
+
+    def __init__(self, source: Mesh, target: Mesh, k: int, random_state: int | None, *,
+                 start: bool = True) -> None:
+        self.seconds: float | None = None
+        self._error: BaseException | None = None
+        self._thread = None
+        if start:
+            # A daemon thread: an error in the caller's block does not make the
+            # interpreter wait for the bases at exit.
+            self._thread = threading.Thread(target=self._compute, args=(source, target, k, random_state),
+                                            name="meshcorr-bases", daemon=True)
+            self._thread.start()
+
+    def _compute(self, source: Mesh, target: Mesh, k: int, random_state: int | None) -> None:
+        start = time.perf_counter()
+        try:
+            for mesh in (source, target):
+                laplace_basis(mesh, k, random_state=random_state)
+        except BaseException as error:  # re-raised in the caller's thread by wait()
+            self._error = error
+        self.seconds = time.perf_counter() - start
+
+    def wait(self) -> None:
+        """Block until both bases are cached on their meshes; re-raise the worker's error."""
+        if self._thread is not None:
+            self._thread.join()
+        if self._error is not None:
+            raise self._error
+
+
+@contextmanager
+def prefetch_bases(source: Mesh, target: Mesh, k: int, *, random_state: int | None = 0,
+                   enabled: bool = True):
+    """Compute the refinement's two Laplace-Beltrami bases in a worker thread.
+
+    The bases depend on the meshes only, not on the map, so
+    :func:`meshcorr.pipeline.match` starts them as soon as the meshes are
+    loaded: the worker spends most of its time in SuperLU solves and ARPACK,
+    which release the GIL, and runs on the second core while the pipeline's
+    other stages run on the first (the bases are the same arrays
+    :func:`laplace_basis` would compute, so the map is the same). Inside the
+    block BLAS is limited to one thread process-wide (held by the calling
+    thread: see :mod:`meshcorr._threads`), so the two threads do not
+    oversubscribe the cores; leaving the block waits for the worker and
+    restores it. After an error inside the block the worker is not waited
+    for: it finishes on its own and its result is dropped.
+
+    Parameters
+    ----------
+    source, target : Mesh
+    k : int
+        Basis size (clipped as :func:`refine_map` clips it).
+    random_state : int or None
+        Seed of the Lanczos start vectors.
+    enabled : bool
+        False: no thread, the block runs as it is.
+
+    Yields
+    ------
+    prefetch : BasisPrefetch
+        ``prefetch.wait()`` blocks until the bases are cached.
+    """
+    if not enabled:
+        yield BasisPrefetch(source, target, 0, random_state, start=False)
+        return
+    k = _basis_size(k, source, target)
+    with single_blas_thread():
+        prefetch = BasisPrefetch(source, target, k, random_state)
+        yield prefetch
+        prefetch.wait()
+
+
 def refine_map(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40, k_start: int = 16,
                step: int = 2, n_sample: int = 500, bijective: bool = False,
                random_state: int | None = 0) -> tuple[np.ndarray, list[dict]]:
@@ -276,8 +365,7 @@ def refine_map(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40, 
     mapping : (n1,) int
     history : list of dict
     """
-    k = check_int("refine_k", k, minimum=2)
-    k = min(k, source.n_vertices - 1, target.n_vertices - 1)
+    k = _basis_size(k, source, target)
     mapping = np.asarray(mapping)
     if mapping.shape != (source.n_vertices,) or (mapping.size and (
             mapping.min() < 0 or mapping.max() >= target.n_vertices)):

@@ -35,6 +35,8 @@ diffusion solve instead took ~40 s per mesh at 115k vertices).
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -110,7 +112,7 @@ def smoothed_curvature(mesh: Mesh, vertices: np.ndarray, radius: float) -> np.nd
         return np.zeros(0)
     balls = tree.query_ball_point(np.asarray(mesh.vertices)[vertices], radius * length, return_sorted=False)
     sizes = np.fromiter((len(b) for b in balls), dtype=np.int64, count=len(balls))
-    members = np.concatenate([np.asarray(b, dtype=np.int64) for b in balls])
+    members = np.fromiter(itertools.chain.from_iterable(balls), dtype=np.int64, count=int(sizes.sum()))
     starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
     return np.add.reduceat(mass[members] * H[members], starts) / np.add.reduceat(mass[members], starts)
 

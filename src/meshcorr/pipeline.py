@@ -190,9 +190,10 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
                           "image of the right one; compare it with result.alternative_map.", MeshWarning,
                           stacklevel=2)
         with timer.stage("matching"):
+            spread = mean_pairwise_distance(X) if anchor_scale == "embedding" and n_anchors > 0 else 1.0
             for candidate in (chosen, other):
                 if candidate is not None:
-                    _finish(candidate, X, Y, spectra, **options)
+                    _finish(candidate, X, spectra, spread, **options)
         if refine:
             with timer.stage("refine"):
                 bases.wait()
@@ -290,7 +291,7 @@ def _align(X: np.ndarray, Y_configured: np.ndarray, *, icp_iterations: int, n_co
                    random_state=random_state)
 
 
-def _finish(candidate: Candidate, X: np.ndarray, Y: np.ndarray, spectra, *, n_anchors: int,
+def _finish(candidate: Candidate, X: np.ndarray, spectra, spread: float, *, n_anchors: int,
             anchor_weight: float, anchor_scale: str, bijective: bool, **_) -> None:
     """Steps 6-7 for one aligned candidate: anchors, proximity-aided matching.
 
@@ -298,7 +299,8 @@ def _finish(candidate: Candidate, X: np.ndarray, Y: np.ndarray, spectra, *, n_an
     the embedding's length scale: multiplied by the mean distance between
     embedded points over ``h`` times the mean normalised geodesic distance
     to the anchors (ALGORITHM.md, "Pitfalls": geodesics in [0, 1] summed over
-    three anchors dwarf embedding distances of ~0.1-0.3).
+    three anchors dwarf embedding distances of ~0.1-0.3). ``spread`` is that mean
+    distance, :func:`meshcorr.tps.mean_pairwise_distance` of ``X``.
     """
     warped = candidate.extra["icp"].warped
     g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
@@ -310,7 +312,7 @@ def _finish(candidate: Candidate, X: np.ndarray, Y: np.ndarray, spectra, *, n_an
     scale = anchor_weight
     if anchor_scale == "embedding" and n_anchors > 0:
         mean_geodesic = 0.5 * (F1.mean() + F2.mean())
-        scale *= mean_pairwise_distance(X) / (n_anchors * max(mean_geodesic, 1e-12))
+        scale *= spread / (n_anchors * max(mean_geodesic, 1e-12))
     mapping, cost = proximity_matching(X, warped, F1 * scale, F2 * scale, bijective=bijective,
                                        neighbours=neighbours)
     candidate.mapping = mapping

@@ -22,6 +22,7 @@ import warnings
 import numpy as np
 
 from ._params import check_choice, check_float, check_int
+from ._threads import parallel_map
 from .anchors import EXACT_PAIRS, anchor_descriptors, embedding_neighbours, proximity_matching, select_anchors
 from .curvature import curvature_disagreement
 from .errors import MeshWarning, ParameterError
@@ -262,25 +263,25 @@ def _score_candidates(src: Mesh, tgt: Mesh, spectra, configurations: list[Config
     sources = rng.choice(len(X), size=min(N_DISTORTION_SOURCES, len(X)), replace=False)
     source_rows: dict = {}
 
-    def score(rank: int) -> Candidate:
-        configuration = configurations[rank]
+    def score(ranks: list[int]) -> list[Candidate]:
+        # The candidates' alignments are independent: one thread per core (meshcorr._threads).
         with timer.stage("icp"):
-            icp = _align(X, configuration.apply(Y), **options)
+            icps = parallel_map(lambda rank: _align(X, configurations[rank].apply(Y), **options), ranks)
         with timer.stage("symmetry"):
-            return Candidate(
-                rank=rank, configuration=configuration,
+            return [Candidate(
+                rank=rank, configuration=configurations[rank],
                 orientation=orientation_score(src, tgt, icp.matches, random_state=seed),
                 curvature=curvature_disagreement(src, tgt, icp.matches, random_state=seed),
                 distortion=(np.nan if reliable else
                             metric_distortion(g1, g2, icp.matches, sources, source_rows)),
                 mapping=icp.matches, extra={"icp": icp, "anchors": np.zeros((0, 2), dtype=np.int64),
-                                            "cost": None})
+                                            "cost": None}) for rank, icp in zip(ranks, icps)]
 
     ranks = candidate_ranks(configurations)
-    candidates = [score(rank) for rank in ranks]
+    candidates = score(ranks)
     if reliable and right_map_missing(candidates):
-        candidates += [score(rank) for rank in range(min(WIDE_CANDIDATES, len(configurations)))
-                       if rank not in ranks]
+        candidates += score([rank for rank in range(min(WIDE_CANDIDATES, len(configurations)))
+                             if rank not in ranks])
     return candidates
 
 

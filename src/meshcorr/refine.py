@@ -47,7 +47,6 @@ from __future__ import annotations
 
 import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 
 import numpy as np
@@ -56,7 +55,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.sparse.linalg import eigsh
 
 from ._params import check_int
-from ._threads import single_blas_thread
+from ._threads import parallel_map, single_blas_thread
 from .embedding import deterministic_start, sign_convention
 from .errors import ParameterError
 from .mesh import Mesh
@@ -373,10 +372,9 @@ def refine_map(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40, 
                              f"per source vertex ({source.n_vertices}). Got shape {mapping.shape}.")
     # The two eigenproblems are independent and SuperLU's solves release the
     # GIL: two threads take ~1.5x less wall time on 2 cores (same results).
-    # The BLAS limit is process-wide: held here around both threads, so that
-    # neither thread's limiter can restore the other's limit (meshcorr._threads).
-    with single_blas_thread(), ThreadPoolExecutor(max_workers=2) as pool:
-        phi1, phi2 = pool.map(lambda mesh: laplace_basis(mesh, k, random_state=random_state)[1],
+    # parallel_map holds the process-wide BLAS limit in this thread around both,
+    # so that neither thread's limiter can restore the other's (meshcorr._threads).
+    phi1, phi2 = parallel_map(lambda mesh: laplace_basis(mesh, k, random_state=random_state)[1],
                               (source, target))
     return zoomout(phi1, phi2, mapping, k_start=min(k_start, k), step=step, n_sample=n_sample,
                    bijective=bijective, random_state=random_state)

@@ -198,8 +198,6 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
         if refine:
             with timer.stage("refine"):
                 bases.wait()
-    if bases.seconds is not None:
-        timer.timings["refine_bases"] = bases.seconds
     refine_history: list = []
     if refine:  # the chosen map only: the alternative is kept as proximity matching gave it
         with timer.stage("refine"):
@@ -231,7 +229,8 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
         eigenvalues={"source": spectra[0].eigenvalues, "target": spectra[1].eigenvalues}, configuration=chosen.configuration,
         alternatives=_chosen_first(configurations, chosen, other),
         anchors=np.stack([src.kept[anchors[:, 0]], tgt.kept[anchors[:, 1]]], axis=1),
-        icp_history=icp.history, icp_converged=icp.converged, timings=timer.timings, params=params,
+        icp_history=icp.history, icp_converged=icp.converged, timings=timer.timings,
+        background_timings={} if bases.seconds is None else {"refine_bases": bases.seconds}, params=params,
         candidates=summaries, alternative_map=alternative_map, orientation_reliable=reliable,
         refine_history=refine_history,
     )

@@ -49,7 +49,12 @@ class Correspondence:
         Per ICP iteration: cost, fraction of matches changed, lambda.
     icp_converged : bool
     timings : dict
-        Seconds per stage.
+        Seconds per stage. The stages run one after another: their sum is
+        the end-to-end time.
+    background_timings : dict
+        Seconds of work done in a worker thread while the stages ran
+        (``"refine_bases"``: the refinement's Laplace-Beltrami bases, see
+        :func:`meshcorr.refine.prefetch_bases`); not part of the sum above.
     params : dict
         The options used.
     candidates : list of dict
@@ -84,6 +89,7 @@ class Correspondence:
     icp_history: list = field(default_factory=list)
     icp_converged: bool = False
     timings: dict = field(default_factory=dict)
+    background_timings: dict = field(default_factory=dict)
     params: dict = field(default_factory=dict)
     candidates: list[dict] = field(default_factory=list)
     alternative_map: np.ndarray | None = None
@@ -113,6 +119,7 @@ class Correspondence:
             "icp": {"iterations": len(self.icp_history), "converged": self.icp_converged,
                     "history": self.icp_history},
             "timings": {k: round(v, 4) for k, v in self.timings.items()},
+            "background_timings": {k: round(v, 4) for k, v in self.background_timings.items()},
             "params": self.params,
             "candidates": self.candidates,
             "orientation_reliable": self.orientation_reliable,

@@ -41,6 +41,9 @@ one-ring from a coarse winner stops in local minima for about half the
 vertices (both measured, ``benchmarks/RESULTS-refine.md``). ARPACK runs
 with single-threaded BLAS: its work outside the sparse solves is
 memory-bound, and threads only add waits on a shared 2-core machine.
+The bases depend on the meshes only: :func:`meshcorr.pipeline.match`
+computes them in a worker thread while its other stages run
+(:func:`prefetch_bases`).
 """
 
 from __future__ import annotations

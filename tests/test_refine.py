@@ -146,6 +146,17 @@ def test_zoomout_prunes_above_the_threshold_with_the_same_map(poses, monkeypatch
     np.testing.assert_array_equal(pruned, brute)
 
 
+def assert_blas_restored(script: str) -> None:
+    """Run ``script`` (printing BLAS thread counts before and after) in a fresh interpreter with 2 BLAS threads."""
+    env = dict(os.environ, OPENBLAS_NUM_THREADS="2", OMP_NUM_THREADS="2")
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                         env=env, timeout=120, check=True).stdout
+    counts = json.loads(out)
+    if max(counts["before"]) < 2:
+        pytest.skip("BLAS runs one thread here: nothing to restore")
+    assert counts["after"] == counts["before"]
+
+
 _OVERLAPPING_REFINE = """
 import json, threading, time
 from threadpoolctl import threadpool_info
@@ -184,13 +195,7 @@ def test_refinement_restores_the_blas_thread_count():
     to leave last: limits set only inside each thread left BLAS at one
     thread for the rest of the process.
     """
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="2", OMP_NUM_THREADS="2")
-    out = subprocess.run([sys.executable, "-c", _OVERLAPPING_REFINE], capture_output=True, text=True,
-                         env=env, timeout=120, check=True).stdout
-    counts = json.loads(out)
-    if max(counts["before"]) < 2:
-        pytest.skip("BLAS runs one thread here: nothing to restore")
-    assert counts["after"] == counts["before"]
+    assert_blas_restored(_OVERLAPPING_REFINE)
 
 
 def test_prefetched_bases_are_the_ones_computed_directly(poses):
@@ -254,10 +259,4 @@ print(json.dumps({"before": before, "after": counts()}))
 
 def test_match_restores_the_blas_thread_count():
     """match() limits BLAS to one thread while the bases compute in the background, then restores it."""
-    env = dict(os.environ, OPENBLAS_NUM_THREADS="2", OMP_NUM_THREADS="2")
-    out = subprocess.run([sys.executable, "-c", _MATCH_BLAS], capture_output=True, text=True,
-                         env=env, timeout=120, check=True).stdout
-    counts = json.loads(out)
-    if max(counts["before"]) < 2:
-        pytest.skip("BLAS runs one thread here: nothing to restore")
-    assert counts["after"] == counts["before"]
+    assert_blas_restored(_MATCH_BLAS)

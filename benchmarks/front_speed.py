@@ -2,15 +2,16 @@
 
 One command reproduces ``benchmarks/RESULTS-front.md``::
 
-    nice -n 10 python benchmarks/front_speed.py [--base-commit d691c85] [--rounds 5] \
+    nice -n 10 python benchmarks/front_speed.py [--base-commit d691c85] [--rounds 5] [--refine] \
         [--data ../shared/data] [--out benchmarks/RESULTS-front.md]
 
 The "old" code is ``git archive <base-commit> src`` unpacked into
 ``benchmarks/cache/front-base`` and put first on ``PYTHONPATH`` of its runs;
 "new" is this checkout. Every run is a fresh process of
 ``benchmarks/scale.py --worker`` (the same worker, timings and error as the
-scaling report), running ``meshcorr.match(..., refine=False)`` in the
-default (auto, hence scalable) mode; old and new runs alternate, so both see
+scaling report), running ``meshcorr.match(..., refine=False)`` (with
+``--refine``: the default settings, refinement included) in the default
+(auto, hence scalable) mode; old and new runs alternate, so both see
 the same machine load, and the report gives their ratios.
 
 Sections:
@@ -71,14 +72,14 @@ def _median(values) -> float:
     return float(statistics.median(values))
 
 
-def speed_section(title: str, runs: dict[str, list[dict]]) -> list[str]:
+def speed_section(title: str, runs: dict[str, list[dict]], stages: tuple = STAGES) -> list[str]:
     med = {v: _median(r["wall"] for r in runs[v]) for v in runs}
     ratios = [o["wall"] / n["wall"] for o, n in zip(runs["old"], runs["new"])]
     lines = [f"### {title}", "",
-             "| version | wall s, each run | median wall s | " + " | ".join(f"{s} s" for s in STAGES)
-             + " | mean error | load avg |", "|---" * (len(STAGES) + 5) + "|"]
+             "| version | wall s, each run | median wall s | " + " | ".join(f"{s} s" for s in stages)
+             + " | mean error | load avg |", "|---" * (len(stages) + 5) + "|"]
     for version in ("old", "new"):
-        stage = [_median(r["timings"].get(s, 0.0) for r in runs[version]) for s in STAGES]
+        stage = [_median(r["timings"].get(s, 0.0) for r in runs[version]) for s in stages]
         walls = ", ".join(f"{r['wall']:.2f}" for r in runs[version])
         lines.append(f"| {version} | {walls} | "
                      f"{med[version]:.2f} | " + " | ".join(f"{t:.2f}" for t in stage)
@@ -118,6 +119,8 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--rounds-large", type=int, default=2)
     parser.add_argument("--sections", default="5k,115k,accuracy")
+    parser.add_argument("--refine", action="store_true",
+                        help="time the default settings, ZoomOut refinement included (5k and 115k sections)")
     parser.add_argument("--out", type=Path, default=None, help="write the Markdown report here (default: stdout)")
     args = parser.parse_args()
     if not (args.data / "tosca5k").is_dir():
@@ -128,18 +131,23 @@ def main() -> int:
     tosca = args.data / "tosca5k"
     old = f"--old-src {args.old_src}" if args.old_src else f"--base-commit {args.base_commit}"
     lines = [f"Command: `nice -n 10 python benchmarks/front_speed.py {old} "
-             f"--rounds {args.rounds} --rounds-large {args.rounds_large} --sections {args.sections}`", "",
+             f"--rounds {args.rounds} --rounds-large {args.rounds_large} --sections {args.sections}"
+             f"{' --refine' if args.refine else ''}`", "",
              f"Machine: {scale.machine()}", ""]
+    # Default settings time the refinement too; refine=False the stages before it only.
+    options, setting, stages = ({}, "default settings", STAGES + ("refine",)) if args.refine else (
+        {"refine": False}, "refine=False", STAGES)
     if "5k" in sections:
         job = dict(name="tosca-cat", source=str(tosca / "cat0.off"), target=str(tosca / "cat1.off"),
                    truth=("vts", [str(tosca / "corres" / f"{s}.vts") for s in ("cat0", "cat1")]),
-                   options={"refine": False})
-        lines += speed_section("TOSCA cat0 -> cat1, 5000 vertices, refine=False", run_both(job, args.rounds, old_src))
+                   options=options)
+        lines += speed_section(f"TOSCA cat0 -> cat1, 5000 vertices, {setting}", run_both(job, args.rounds, old_src),
+                               stages)
     if "115k" in sections:
         pair = next(p for p in scale.prepare_pairs(args.data) if p["name"] == "sumner-cat-x2")
-        job = dict(pair, options={"refine": False})
-        lines += speed_section("Sumner cat pair subdivided twice, 115 282 vertices, refine=False",
-                               run_both(job, args.rounds_large, old_src))
+        job = dict(pair, options=options)
+        lines += speed_section(f"Sumner cat pair subdivided twice, 115 282 vertices, {setting}",
+                               run_both(job, args.rounds_large, old_src), stages)
     if "accuracy" in sections:
         lines += ["### Accuracy on 8 TOSCA pairs (one per class), refine=False", ""]
         lines += accuracy_section(args.data, old_src)

@@ -14,7 +14,7 @@ TITLES = {
     "baselines": "The paper's baselines vs spectral (issue 3)",
     "evaluation": "Evaluation, benchmark and the paper's experiments (issue 3)",
     "scale": "Scale and speed (issue 5)",
-    "front": "Speed of the stages before the refinement, old vs new (issue 5)",
+    "front": "Speed, old vs new side by side (issue 5)",
     "refine": "Speed of the ZoomOut refinement, old vs new (issue 5)",
     "symmetry": "Left/right mirror and refinement (issue 6)",
     "viz": "Pictures and report (issue 4)",

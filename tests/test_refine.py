@@ -8,6 +8,7 @@ import time
 
 import numpy as np
 import pytest
+from scipy.sparse.linalg import LinearOperator
 from scipy.spatial import cKDTree
 
 import meshcorr
@@ -211,26 +212,41 @@ def test_prefetched_bases_are_the_ones_computed_directly(poses):
         np.testing.assert_array_equal(prefetched[1], direct[1])
 
 
-def test_prefetch_reraises_the_worker_error_and_does_not_wait_after_an_error(poses, monkeypatch):
+def test_prefetch_reraises_the_worker_error_and_cancels_the_worker_after_an_error(poses, monkeypatch):
     import meshcorr.refine as refine
 
-    def failing(mesh, k, random_state=0):
+    def failing(mesh, k, random_state, cancel):
         raise ParameterError("basis failed")
 
-    monkeypatch.setattr(refine, "laplace_basis", failing)
-    with pytest.raises(ParameterError, match="basis failed"):
-        with prefetch_bases(*poses, 12):
-            pass
+    with monkeypatch.context() as patch:
+        patch.setattr(refine, "_laplace_basis", failing)
+        with pytest.raises(ParameterError, match="basis failed"):
+            with prefetch_bases(*poses, 12):
+                pass
 
-    def slow(mesh, k, random_state=0):
-        time.sleep(3.0)
+    # An error in the block cancels the worker at its next solve: no wait for the whole eigensolve.
+    solves = []
 
-    monkeypatch.setattr(refine, "laplace_basis", slow)
+    def counting_eigsh(*args, OPinv, **kwargs):
+        def slow_solve(x):
+            solves.append(1)
+            time.sleep(0.05)
+            return OPinv.matvec(x)
+
+        return real_eigsh(*args, OPinv=LinearOperator(OPinv.shape, matvec=slow_solve, dtype=float), **kwargs)
+
+    real_eigsh = refine.eigsh
+    monkeypatch.setattr(refine, "eigsh", counting_eigsh)
+    fresh = [Mesh(m.vertices, m.faces) for m in poses]
     start = time.perf_counter()
     with pytest.raises(RuntimeError, match="stage failed"):
-        with prefetch_bases(*poses, 12):
+        with prefetch_bases(*fresh, 12) as prefetch:
+            time.sleep(0.3)
             raise RuntimeError("stage failed")
-    assert time.perf_counter() - start < 1.5  # the 3 s worker was left to finish on its own
+    assert time.perf_counter() - start < 1.5  # the full eigensolves take ~50 solves x 0.05 s each
+    assert prefetch._done.is_set()
+    assert 0 < len(solves) < 20
+    assert not any(key[0] == "laplace_basis" for mesh in fresh for key in mesh._cache)
 
 
 def test_match_reports_the_background_basis_time(poses):

@@ -55,7 +55,7 @@ from contextlib import contextmanager
 import numpy as np
 import scipy.sparse as sp
 from scipy.optimize import linear_sum_assignment
-from scipy.sparse.linalg import eigsh
+from scipy.sparse.linalg import LinearOperator, eigsh, splu
 
 from ._params import check_int
 from ._threads import parallel_map, single_blas_thread
@@ -88,6 +88,16 @@ def laplace_basis(mesh: Mesh, k: int, *, random_state: int | None = 0) -> tuple[
         area (:math:`\\Phi^T M \\Phi = I`, :math:`\\sum M = 1`), signs fixed
         by :func:`meshcorr.embedding.sign_convention`.
     """
+    return _laplace_basis(mesh, k, random_state, cancel=None)
+
+
+class _Cancelled(Exception):
+    """Raised inside the eigensolver of an abandoned :class:`BasisPrefetch`."""
+
+
+def _laplace_basis(mesh: Mesh, k: int, random_state: int | None,
+                   cancel: threading.Event | None) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`laplace_basis`; raises :class:`_Cancelled` between two solves once ``cancel`` is set."""
     import potpourri3d as pp3d
 
     n = mesh.n_vertices
@@ -95,19 +105,29 @@ def laplace_basis(mesh: Mesh, k: int, *, random_state: int | None = 0) -> tuple[
     key = ("laplace_basis", k, random_state)
     if key not in mesh._cache:
         V, F = np.asarray(mesh.vertices), np.asarray(mesh.faces)
-        L = pp3d.cotan_laplacian(V, F)
+        L = pp3d.cotan_laplacian(V, F).tocsc()
         # Unit total area: bases of meshes of different sizes are then comparable
         # (an orthogonal functional map cannot absorb a scale factor).
         mass = pp3d.vertex_areas(V, F)
         mass = mass / mass.sum()
+        M = sp.diags(mass).tocsc()
         # A tiny negative shift keeps the shift-inverted operator non-singular
         # (L is singular: constants are in its kernel).
         shift = -1e-8 * float(np.abs(L.diagonal()).mean() / mass.mean())
+        # The shift-inverted operator eigsh would build itself (scipy's SpLuInv of
+        # L - shift M), written out so that an abandoned prefetch can stop it.
+        lu = splu((L - shift * M).tocsc())
+
+        def solve(x: np.ndarray) -> np.ndarray:
+            if cancel is not None and cancel.is_set():
+                raise _Cancelled
+            return lu.solve(np.asarray(x).astype(float))
+
         # ARPACK's reorthogonalisation is memory-bound BLAS-2: threads only add
         # waits (measured 2x slower with 2 threads on a loaded 2-core machine).
         with single_blas_thread():
-            values, vectors = eigsh(L.tocsc(), k=k, M=sp.diags(mass).tocsc(), sigma=shift, which="LM",
-                                    v0=deterministic_start(n, random_state))
+            values, vectors = eigsh(L, k=k, M=M, sigma=shift, which="LM", v0=deterministic_start(n, random_state),
+                                    OPinv=LinearOperator(L.shape, matvec=solve, dtype=float))
         order = np.argsort(values)
         values, vectors = values[order], sign_convention(vectors[:, order])
         vectors.flags.writeable = False
@@ -280,29 +300,43 @@ class BasisPrefetch:
                  start: bool = True) -> None:
         self.seconds: float | None = None
         self._error: BaseException | None = None
+        self._cancel = threading.Event()
+        # Waiters wait on this event, not on Thread.join: a join interrupted by Ctrl-C can mark a
+        # running thread as stopped on Python 3.11 (its tstate lock is released by the interrupted
+        # waiter), and the interpreter then finalises under the running worker and crashes.
+        self._done = threading.Event()
         self._thread = None
         if start:
-            # A daemon thread: an error in the caller's block does not make the
-            # interpreter wait for the bases at exit.
             self._thread = threading.Thread(target=self._compute, args=(source, target, k, random_state),
-                                            name="meshcorr-bases", daemon=True)
+                                            name="meshcorr-bases")
             self._thread.start()
 
     def _compute(self, source: Mesh, target: Mesh, k: int, random_state: int | None) -> None:
         start = time.perf_counter()
         try:
             for mesh in (source, target):
-                laplace_basis(mesh, k, random_state=random_state)
+                if not self._cancel.is_set():
+                    _laplace_basis(mesh, k, random_state, self._cancel)
+        except _Cancelled:
+            pass
         except BaseException as error:  # re-raised in the caller's thread by wait()
             self._error = error
-        self.seconds = time.perf_counter() - start
+        finally:
+            self.seconds = time.perf_counter() - start
+            self._done.set()
 
     def wait(self) -> None:
         """Block until both bases are cached on their meshes; re-raise the worker's error."""
         if self._thread is not None:
-            self._thread.join()
+            self._done.wait()
         if self._error is not None:
             raise self._error
+
+    def cancel(self) -> None:
+        """Stop the worker at its next sparse solve (or between the meshes) and wait for it."""
+        self._cancel.set()
+        if self._thread is not None:
+            self._done.wait()
 
 
 @contextmanager
@@ -319,8 +353,9 @@ def prefetch_bases(source: Mesh, target: Mesh, k: int, *, random_state: int | No
     block BLAS is limited to one thread process-wide (held by the calling
     thread: see :mod:`meshcorr._threads`), so the two threads do not
     oversubscribe the cores; leaving the block waits for the worker and
-    restores it. After an error inside the block the worker is not waited
-    for: it finishes on its own and its result is dropped.
+    restores it. After an error inside the block (or Ctrl-C) the worker is
+    cancelled: it stops at its next sparse solve (milliseconds; a sparse
+    factorisation under way, up to ~1 s at 100k vertices, runs to its end).
 
     Parameters
     ----------
@@ -343,7 +378,11 @@ def prefetch_bases(source: Mesh, target: Mesh, k: int, *, random_state: int | No
     k = _basis_size(k, source, target)
     with single_blas_thread():
         prefetch = BasisPrefetch(source, target, k, random_state)
-        yield prefetch
+        try:
+            yield prefetch
+        except BaseException:
+            prefetch.cancel()
+            raise
         prefetch.wait()
 
 

@@ -276,3 +276,43 @@ print(json.dumps({"before": before, "after": counts()}))
 def test_match_restores_the_blas_thread_count():
     """match() limits BLAS to one thread while the bases compute in the background, then restores it."""
     assert_blas_restored(_MATCH_BLAS)
+
+
+_INTERRUPTED_WAIT = """
+import signal, time
+from scipy.sparse.linalg import LinearOperator
+import meshcorr.refine as refine
+from meshcorr import datasets as ds
+from meshcorr.mesh import Mesh
+
+real_eigsh = refine.eigsh
+
+def slow_eigsh(*args, OPinv, **kwargs):
+    def solve(x):
+        time.sleep(0.02)
+        return OPinv.matvec(x)
+    return real_eigsh(*args, OPinv=LinearOperator(OPinv.shape, matvec=solve, dtype=float), **kwargs)
+
+def interrupt(*_):
+    raise KeyboardInterrupt
+
+refine.eigsh = slow_eigsh
+shape = ds.figure(resolution=2)
+meshes = [Mesh(shape.vertices, shape.faces) for _ in range(2)]
+signal.signal(signal.SIGALRM, interrupt)
+signal.setitimer(signal.ITIMER_REAL, 0.3)
+try:
+    with refine.prefetch_bases(*meshes, 12) as prefetch:
+        prefetch.wait()
+except KeyboardInterrupt:
+    print("interrupted", prefetch._done.is_set())
+"""
+
+
+def test_ctrl_c_while_waiting_for_the_bases_cancels_the_worker_and_exits_cleanly():
+    """Ctrl-C in the wait stops the worker before the interpreter exits (an interrupted
+    Thread.join could mark it stopped while it ran, and the exit then crashed under it)."""
+    out = subprocess.run([sys.executable, "-c", _INTERRUPTED_WAIT], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "interrupted True"
+    assert out.stderr == ""

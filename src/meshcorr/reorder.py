@@ -36,6 +36,7 @@ ranked list always holds the near-tied alternatives.
 from __future__ import annotations
 
 import itertools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -124,6 +125,17 @@ _MARGINAL_KEEP = 768
 _QUANTILES = np.linspace(0.005, 0.995, 199)
 #: Coarse pass: (source points, target points, configurations kept) when there are more.
 _COARSE = (48, 256, 64)
+#: Largest number of configurations listed in full (d = 5 gives 3840, d = 6 46 080, d = 9 185 million).
+_EXACT_LIMIT = 50_000
+
+
+def _marginal_table(X: np.ndarray, Y: np.ndarray) -> np.ndarray:
+    """``table[c, t, f]``: 1-d Wasserstein distance between ``X[:, c]`` and ``(-1)^f Y[:, t]``, ``(d, d, 2)``."""
+    qx = np.quantile(X, _QUANTILES, axis=0)
+    qy = np.quantile(Y, _QUANTILES, axis=0)
+    qy_flipped = -qy[::-1]  # quantiles of -Y (the levels are symmetric about 1/2)
+    return np.stack([np.abs(qx[:, :, None] - qy[:, None, :]).mean(axis=0),
+                     np.abs(qx[:, :, None] - qy_flipped[:, None, :]).mean(axis=0)], axis=-1)
 
 
 def _marginal_costs(X: np.ndarray, Y: np.ndarray, configs: list[tuple[tuple, tuple]]) -> np.ndarray:
@@ -145,14 +157,37 @@ def _marginal_costs(X: np.ndarray, Y: np.ndarray, configs: list[tuple[tuple, tup
     (within 108 on 39 pairs); :data:`_MARGINAL_KEEP` keeps 768.
     """
     d = X.shape[1]
-    qx = np.quantile(X, _QUANTILES, axis=0)
-    qy = np.quantile(Y, _QUANTILES, axis=0)
-    qy_flipped = -qy[::-1]  # quantiles of -Y (the levels are symmetric about 1/2)
-    table = np.stack([np.abs(qx[:, :, None] - qy[:, None, :]).mean(axis=0),
-                      np.abs(qx[:, :, None] - qy_flipped[:, None, :]).mean(axis=0)], axis=-1)
     perms = np.asarray([p for p, _ in configs], dtype=np.int64)
     flipped = np.asarray([s for _, s in configs]) < 0
-    return table[np.arange(d), perms, flipped.astype(np.int64)].sum(axis=1)
+    return _marginal_table(X, Y)[np.arange(d), perms, flipped.astype(np.int64)].sum(axis=1)
+
+
+def _exhaustive_configurations(X: np.ndarray, Y: np.ndarray) -> list[tuple[tuple, tuple]]:
+    """The configurations the exhaustive mode scores: all ``d! 2^d``, or the best by the proxy.
+
+    Every configuration when the brute-force passes of :func:`_rank` can
+    afford it (at most :data:`_COARSE` [0] source points and at most
+    :data:`_EXACT_LIMIT` configurations); otherwise the :data:`_MARGINAL_KEEP`
+    of lowest :func:`_marginal_costs`, found without listing all of them
+    (185 million at d = 9): with :math:`B(\\pi)` the proxy of permutation
+    :math:`\\pi` under its best signs, the ``K`` best configurations all use
+    one of the ``K`` permutations of lowest :math:`B` (each of those has a
+    configuration costing at most :math:`B`), so only those ``K`` permutations'
+    :math:`2^d` sign sets are scored.
+    """
+    d = X.shape[1]
+    n_configs = math.factorial(d) * 2 ** d
+    if n_configs <= _MARGINAL_KEEP or (len(X) <= _COARSE[0] and n_configs <= _EXACT_LIMIT):
+        return [(p, s) for p in itertools.permutations(range(d)) for s in _all_signs(d)]
+    table = _marginal_table(X, Y)
+    perms = np.asarray(list(itertools.permutations(range(d))), dtype=np.int64)
+    best = table.min(axis=2)[np.arange(d), perms].sum(axis=1)
+    pool = perms[np.argsort(best, kind="stable")[:_MARGINAL_KEEP]]
+    signs = np.asarray(_all_signs(d), dtype=np.int64)
+    costs = table[np.arange(d), pool[:, None, :], (signs < 0).astype(np.int64)[None, :, :]].sum(axis=2)
+    keep = np.argsort(costs.ravel(), kind="stable")[:_MARGINAL_KEEP]
+    return [(tuple(int(v) for v in pool[i // len(signs)]), tuple(int(v) for v in signs[i % len(signs)]))
+            for i in keep]
 
 
 #: Squared distances per block of :func:`_brute_costs` (~2 MB of float64: stays in cache).
@@ -200,9 +235,9 @@ def _rank(X, Y, configs, n_sample, n_rescore, n_score, rng, chosen=None) -> list
 
     Wrong configurations put the queries far from the target, where KD-tree
     queries are slow, so the configurations are whittled down on growing
-    random subsets, scored by brute force (:func:`_brute_costs`), after a
-    pre-screen of the distributions of single coordinates
-    (:func:`_marginal_costs`) keeps the best 768: a coarse pass (48 source
+    random subsets, scored by brute force (:func:`_brute_costs`; the
+    exhaustive mode's list is already screened by the distributions of
+    single coordinates, :func:`_exhaustive_configurations`): a coarse pass (48 source
     against 256 target points) keeps the best 64, a second pass
     (``n_sample`` source points against ``2 * n_sample``, at least 1000,
     target points) the best ``n_rescore``;
@@ -220,8 +255,6 @@ def _rank(X, Y, configs, n_sample, n_rescore, n_score, rng, chosen=None) -> list
     """
     configs = list(dict.fromkeys(configs))  # de-duplicate, keep order
     n_coarse_source, n_coarse_target, n_coarse_keep = _COARSE
-    if len(X) > n_coarse_source and len(configs) > _MARGINAL_KEEP:
-        configs = [configs[i] for i in np.argsort(_marginal_costs(X, Y, configs), kind="stable")[:_MARGINAL_KEEP]]
     if len(X) > n_coarse_source and len(configs) > max(n_coarse_keep, n_rescore):
         configs = _prescore(X, Y, configs, n_coarse_source, n_coarse_target, max(n_coarse_keep, n_rescore), rng)
     if len(X) > n_sample and len(configs) > n_rescore:
@@ -324,7 +357,7 @@ def rank_configurations(X: np.ndarray, Y: np.ndarray, mode: str = "exhaustive", 
     sample = rng.choice(len(X), size=min(n_sample, len(X)), replace=False)
     chosen = None
     if mode == "exhaustive":
-        configs = [(p, s) for p in itertools.permutations(range(d)) for s in _all_signs(d)]
+        configs = _exhaustive_configurations(X, Y)
     elif mode == "greedy":
         chosen = _greedy_order(X, Y, sample)
         configs = [chosen] + [(chosen[0], s) for s in _all_signs(d)]

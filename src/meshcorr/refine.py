@@ -305,11 +305,11 @@ class BasisPrefetch:
         # running thread as stopped on Python 3.11 (its tstate lock is released by the interrupted
         # waiter), and the interpreter then finalises under the running worker and crashes.
         self._done = threading.Event()
-        self._thread = None
         if start:
-            self._thread = threading.Thread(target=self._compute, args=(source, target, k, random_state),
-                                            name="meshcorr-bases")
-            self._thread.start()
+            threading.Thread(target=self._compute, args=(source, target, k, random_state),
+                             name="meshcorr-bases").start()
+        else:
+            self._done.set()
 
     def _compute(self, source: Mesh, target: Mesh, k: int, random_state: int | None) -> None:
         start = time.perf_counter()
@@ -327,16 +327,14 @@ class BasisPrefetch:
 
     def wait(self) -> None:
         """Block until both bases are cached on their meshes; re-raise the worker's error."""
-        if self._thread is not None:
-            self._done.wait()
+        self._done.wait()
         if self._error is not None:
             raise self._error
 
     def cancel(self) -> None:
         """Stop the worker at its next sparse solve (or between the meshes) and wait for it."""
         self._cancel.set()
-        if self._thread is not None:
-            self._done.wait()
+        self._done.wait()
 
 
 @contextmanager

@@ -66,11 +66,19 @@ def test_registry_names_and_spatial_methods():
 
 def test_match_dispatches_to_the_baseline(shape, moved):
     copy, truth = moved
-    result = meshcorr.match(_vf(shape), _vf(copy), method="icp", k=5, reorder="greedy")
+    result = meshcorr.match(_vf(shape), _vf(copy), method="icp")
     assert result.method == "icp"
     np.testing.assert_array_equal(result.map, truth)
     assert result.params["prealign"] is True and set(result.timings) >= {"load", "prealign", "icp", "matching"}
     assert result.summary()["method"] == "icp"
+
+
+def test_match_rejects_options_the_baseline_does_not_use(shape):
+    # issue 14: match(a, b, method="icp", k=9, symmetry="mirror") ran without a word.
+    with pytest.raises(ParameterError, match="'icp' does not use the options 'k', 'reorder'.*trim"):
+        meshcorr.match(_vf(shape), _vf(shape), method="icp", k=5, reorder="greedy")
+    with pytest.raises(ParameterError, match="'spectral' does not use the option 'prealign'"):
+        meshcorr.match(_vf(shape), _vf(shape), prealign=False)
 
 
 def test_run_method_spectral_is_the_pipeline(shape, moved):

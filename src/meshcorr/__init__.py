@@ -1,15 +1,20 @@
 """meshcorr: dense vertex correspondence between 3D triangle meshes in the spectral domain.
 
-The main entry point is :func:`match`; see :mod:`meshcorr.pipeline` for the
-method (Jain & Zhang, SMI 2006).
+The one-call entry point is :func:`match`; :class:`Matcher` is the staged
+form (settings first, ``fit`` later) with its :class:`Settings`. See
+:mod:`meshcorr.pipeline` for the method (Jain & Zhang, SMI 2006) and
+``docs/method.md`` for its choices.
 """
 
+from ._version import __version__
 from .errors import MeshError, MeshWarning, MeshcorrError, ParameterError
 from .mesh import Mesh, as_mesh
 from .pipeline import match
 from .result import Correspondence
+from .settings import Settings
+from .matcher import Matcher
+from . import datasets, evaluation, fmap, precise, progress, transfer, viz  # noqa: E402 - public submodules
 
-__version__ = "0.1.0"
-
-__all__ = ["match", "Correspondence", "Mesh", "as_mesh", "MeshError", "MeshWarning",
-           "MeshcorrError", "ParameterError", "__version__"]
+__all__ = ["match", "Matcher", "Settings", "Correspondence", "Mesh", "as_mesh", "MeshError", "MeshWarning",
+           "MeshcorrError", "ParameterError", "datasets", "evaluation", "fmap", "precise", "progress",
+           "transfer", "viz", "__version__"]

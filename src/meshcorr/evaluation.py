@@ -19,6 +19,22 @@ Geodesics come from single-source solves (:mod:`meshcorr.geodesics`), kept
 in a :class:`GeodesicCache` keyed on the mesh's content and the solver, so
 a map, its mirrored truth and further maps onto the same target cost no
 new solves. Plots live in :mod:`meshcorr.plots` (optional matplotlib).
+
+Measures that need no ground truth (:func:`map_quality`), for a map
+:math:`T: S \\to T` between meshes of areas :math:`A_S, A_T`:
+
+- *coverage*: the share of the target's area reached,
+  :math:`\\sum_{j \\in T(S)} a_j / A_T` with the lumped vertex areas
+  :math:`a_j`;
+- *bijectivity*: distinct images over mapped source vertices,
+  :math:`|T(S)| / |S|` (1 for a one-to-one map);
+- *continuity*: over the source edges :math:`(i, j)`, the mean ratio of the
+  images' distance to the edge's length, each divided by the square root of
+  its mesh's area,
+  :math:`\\operatorname{mean} \\frac{\\lVert x_{T(i)} - x_{T(j)} \\rVert / \\sqrt{A_T}}
+  {\\lVert x_i - x_j \\rVert / \\sqrt{A_S}}` (about 1 for a smooth,
+  area-preserving map; larger where neighbours are torn apart), and the
+  share of edges stretched more than :data:`TEAR_RATIO` times (tears).
 """
 
 from __future__ import annotations
@@ -35,11 +51,13 @@ from .geodesics import GEODESIC_METHODS, geodesic_solver
 from .ground_truth import GroundTruth
 from .mesh import Mesh, MeshLike, as_mesh
 
-__all__ = ["THRESHOLDS", "GeodesicCache", "cumulative_curve", "evaluate_map",
-           "feature_point_accuracy", "geodesic_errors", "scalar_summary"]
+__all__ = ["THRESHOLDS", "TEAR_RATIO", "GeodesicCache", "cumulative_curve", "evaluate_map",
+           "feature_point_accuracy", "geodesic_errors", "map_quality", "scalar_summary"]
 
 #: Error thresholds reported by default (fractions of sqrt(target area)).
 THRESHOLDS = (0.05, 0.1, 0.25)
+#: An edge whose normalised image is this many times longer than itself counts as torn.
+TEAR_RATIO = 5.0
 
 
 class GeodesicCache:
@@ -367,3 +385,52 @@ def feature_point_accuracy(target: MeshLike, mapping: np.ndarray, truth: GroundT
     report = evaluate_map(target, mapping, truth, thresholds=[tolerance], geodesic=geodesic,
                           cache=cache)
     return report["under"][f"{float(tolerance):g}"]
+
+
+def map_quality(source: MeshLike, target: MeshLike, mapping: np.ndarray) -> dict:
+    """Coverage, bijectivity and continuity of a vertex map (module docstring); no ground truth.
+
+    Parameters
+    ----------
+    source, target : mesh-like
+    mapping : (n_source,) int
+        Target vertex of each source vertex; -1 = unmapped (left out).
+
+    Returns
+    -------
+    measures : dict
+        ``coverage`` (share of target area reached, in [0, 1]),
+        ``bijectivity`` (distinct images / mapped vertices, in (0, 1]),
+        ``continuity`` (mean normalised edge-length ratio over source edges
+        with both ends mapped), ``torn_edges`` (share of those edges with a
+        ratio above :data:`TEAR_RATIO`).
+
+    Raises
+    ------
+    ParameterError
+        If the map does not fit the meshes.
+    """
+    import potpourri3d as pp3d
+
+    from .transfer import check_map
+
+    src = source if isinstance(source, Mesh) else as_mesh(source, name="source")
+    tgt = _target_mesh(target)
+    mapping = check_map(mapping, src.n_vertices, tgt.n_vertices)
+    mapped = mapping >= 0
+    if not mapped.any():
+        raise ParameterError("The map sends no source vertex anywhere; there is nothing to measure.")
+    areas = pp3d.vertex_areas(np.asarray(tgt.vertices), np.asarray(tgt.faces))
+    reached = np.unique(mapping[mapped])
+    faces = np.asarray(src.faces)
+    edges = np.unique(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1),
+                      axis=0)
+    edges = edges[mapped[edges].all(axis=1)]
+    length = np.linalg.norm(src.vertices[edges[:, 0]] - src.vertices[edges[:, 1]], axis=1) / np.sqrt(src.area)
+    image = mapping[edges]
+    stretch = np.linalg.norm(tgt.vertices[image[:, 0]] - tgt.vertices[image[:, 1]], axis=1) / np.sqrt(tgt.area)
+    ratio = stretch / np.maximum(length, 1e-300)
+    return {"coverage": float(areas[reached].sum() / areas.sum()),
+            "bijectivity": float(reached.size / mapped.sum()),
+            "continuity": float(ratio.mean()) if ratio.size else float("nan"),
+            "torn_edges": float(np.mean(ratio > TEAR_RATIO)) if ratio.size else float("nan")}

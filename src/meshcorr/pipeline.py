@@ -29,8 +29,10 @@ from .errors import MeshWarning, ParameterError
 from .geodesics import GEODESIC_METHODS
 from .icp import tps_icp
 from .mesh import Mesh, MeshLike, as_mesh
+from .methods import METHOD_NAMES, applicable_options, changed_options, reject_inapplicable, run_method
 from .modes import MODES, N_LANDMARKS, SCALABLE_ABOVE, build_spectrum, resolve_memory, select_mode
 from .orientation import mesh_orientation, orientation_score
+from .progress import as_progress
 from .refine import prefetch_bases, refine_map
 from .reorder import REORDER_MODES, Configuration, rank_configurations
 from .result import Correspondence
@@ -89,8 +91,9 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
         raising on several components.
     random_state : int or None
         Seed for everything random (eigensolver start, samples).
-    progress : callable, optional
-        ``progress(stage, done, total)``.
+    progress : callable or bool, optional
+        ``progress(stage, done, total)``, or True for a progress bar
+        (:class:`meshcorr.progress.TqdmProgress`, notebook-aware).
     mode : {"auto", "dense", "scalable"}
         "dense": all-pairs geodesics and the exact eigenpairs (``O(n^2)``
         memory, the reference); "scalable": landmark geodesics and the
@@ -107,8 +110,9 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
     method : {"spectral", "shapiro-brady", "shapiro-brady-scaled", "tps-rpm", "icp", "shape-context"}
         "spectral" is this pipeline; the others are the paper's baselines
         (:mod:`meshcorr.baselines`), which take ``k``, ``geodesic``,
-        ``bijective`` and ``largest_component`` where they apply and ignore
-        the other options here.
+        ``bijective`` and ``largest_component`` where they apply; an option
+        changed from its default that the method does not use raises
+        :class:`ParameterError` naming it (:func:`meshcorr.methods.reject_inapplicable`).
     prealign : bool
         Pre-align the inputs to their principal axes (spatial baselines only).
     symmetry : {"auto", "cost", "mirror"}
@@ -132,9 +136,9 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
     result : Correspondence
         ``result.map[i]`` is the target vertex of source vertex i.
     """
-    from .baselines import METHODS, applicable_options, run_method  # imports this module
-
-    if check_choice("method", method, tuple(METHODS)) != "spectral":
+    reject_inapplicable(method, changed_options(match, locals()))  # ParameterError naming unused options
+    progress = as_progress(progress)
+    if check_choice("method", method, METHOD_NAMES) != "spectral":
         common = dict(k=k, geodesic=geodesic, bijective=bijective, largest_component=largest_component)
         return run_method(method, source, target, prealign=prealign, random_state=random_state,
                           progress=progress, **applicable_options(method, common))
@@ -224,7 +228,8 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
                   n_landmarks=n_landmarks, max_memory=max_memory, symmetry=symmetry, refine=refine,
                   refine_k=refine_k, anchor_scale=anchor_scale)
     return Correspondence(
-        map=full_map, cost=full_cost, source_vertices=src.kept.copy(), target_vertices=tgt.kept.copy(),
+        map=full_map, cost=None if refine else full_cost, source=src, target=tgt,
+        source_vertices=src.kept.copy(), target_vertices=tgt.kept.copy(),
         source_embedding=X, target_embedding=Y_configured, aligned_target_embedding=icp.warped,
         eigenvalues={"source": spectra[0].eigenvalues, "target": spectra[1].eigenvalues}, configuration=chosen.configuration,
         alternatives=_chosen_first(configurations, chosen, other),

@@ -1,12 +1,42 @@
-"""The result of a correspondence computation."""
+"""The result of a correspondence computation, and what can be done with it.
+
+:class:`Correspondence` holds the vertex map and how it was found, and keeps
+both meshes it was computed on, so that in a notebook or a script the map
+can be evaluated (:meth:`~Correspondence.evaluate`), turned into a precise
+map (:meth:`~Correspondence.precise_map`) or a functional map
+(:meth:`~Correspondence.functional_map`), used to carry values
+(:meth:`~Correspondence.transfer`), inverted, composed, saved, loaded and
+shown (:meth:`~Correspondence.show`).
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import html
+import json
+import os
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 
+from ._version import __version__
+from .errors import ParameterError
+from .mesh import Mesh
 from .reorder import Configuration
+
+#: Array attributes written by :meth:`Correspondence.save`.
+_ARRAYS = ("map", "cost", "source_vertices", "target_vertices", "source_embedding", "target_embedding",
+           "aligned_target_embedding", "anchors", "alternative_map")
+#: Attributes that are no JSON and no array.
+_SPECIAL = ("configuration", "alternatives", "eigenvalues", "source", "target")
+
+
+def _light_copy(mesh: Mesh | None) -> Mesh | None:
+    """The mesh without its large cached data (geodesic matrices); Laplace-Beltrami bases are kept."""
+    if mesh is None:
+        return None
+    copy = Mesh(mesh.vertices, mesh.faces, name=mesh.name, kept=mesh.kept, n_original=mesh.n_original)
+    copy._cache.update({key: value for key, value in mesh._cache.items() if key[0] == "laplace_basis"})
+    return copy
 
 
 @dataclass
@@ -18,9 +48,13 @@ class Correspondence:
     map : (n_source,) int
         ``map[i]`` is the target vertex matched to source vertex i, in the
         vertex numbering of the input files. -1 for source vertices that
-        were not mapped (dropped by ``largest_component=True``).
+        were not mapped (dropped by ``largest_component=True``). In pyFM's
+        naming this is ``p2p_21`` with mesh 1 = target, mesh 2 = source.
     cost : (n_source,) float or None
-        Final matching cost of each pair (NaN where unmapped).
+        Final matching cost of each pair (NaN where unmapped): the
+        proximity-aided matching's embedding-plus-anchor distance, or a
+        baseline's final distance. None when the last stage has no per-pair
+        cost: the ZoomOut refinement (on by default), a baseline without one.
     method : str
         The method that produced the map ("spectral" or a baseline's name).
         Attributes below that a method does not produce are None or empty.
@@ -72,6 +106,11 @@ class Correspondence:
         scores mean something (see :mod:`meshcorr.orientation`).
     refine_history : list of dict
         Per ZoomOut iteration (:mod:`meshcorr.refine`): basis size, fraction changed.
+    source, target : Mesh or None
+        The meshes as matched (after ``largest_component``), kept without
+        their cached geodesic matrices; None if not recorded.
+    version : str
+        The meshcorr version that computed the map (also ``params["meshcorr_version"]``).
     """
 
     map: np.ndarray
@@ -95,6 +134,17 @@ class Correspondence:
     alternative_map: np.ndarray | None = None
     orientation_reliable: bool | None = None
     refine_history: list = field(default_factory=list)
+    source: Mesh | None = field(default=None, repr=False, compare=False)
+    target: Mesh | None = field(default=None, repr=False, compare=False)
+    version: str = __version__
+
+    def __post_init__(self) -> None:
+        self.params = {**self.params, "meshcorr_version": self.params.get("meshcorr_version", self.version)}
+        self.source, self.target = _light_copy(self.source), _light_copy(self.target)
+
+    def attach_meshes(self, source: Mesh, target: Mesh) -> None:
+        """Record the meshes the map was computed on (as :func:`meshcorr.match` does)."""
+        self.source, self.target = _light_copy(source), _light_copy(target)
 
     @property
     def runner_up(self) -> Configuration | None:
@@ -106,6 +156,7 @@ class Correspondence:
         mapped = self.map >= 0
         has_cost = self.cost is not None and bool(np.isfinite(self.cost).any())
         return {
+            "meshcorr_version": self.version,
             "method": self.method,
             "n_source": int(len(self.map)),
             "n_mapped": int(mapped.sum()),
@@ -125,3 +176,280 @@ class Correspondence:
             "orientation_reliable": self.orientation_reliable,
             "refine": {"iterations": len(self.refine_history), "history": self.refine_history},
         }
+
+    # ------------------------------------------------------------------ display
+
+    def _headline(self) -> dict:
+        mapped = self.map >= 0
+        n_target = self.target.n_original if self.target is not None else None
+        return {"method": self.method, "n_source": int(len(self.map)), "n_mapped": int(mapped.sum()),
+                "n_target": n_target, "n_target_hit": int(len(np.unique(self.map[mapped]))),
+                "seconds": round(float(sum(self.timings.values())), 2), "version": self.version}
+
+    def __repr__(self) -> str:
+        head = self._headline()
+        text = ", ".join(f"{key}={value!r}" for key, value in head.items() if value is not None)
+        return f"Correspondence({text})"
+
+    def _repr_html_(self) -> str:
+        head = self._headline()
+        rows = [("method", head["method"]),
+                ("source vertices mapped", f"{head['n_mapped']} of {head['n_source']}"),
+                ("target vertices reached", f"{head['n_target_hit']}"
+                 + (f" of {head['n_target']}" if head["n_target"] is not None else "")),
+                ("configuration", self.configuration.to_dict() if self.configuration else "-"),
+                ("ICP iterations", f"{len(self.icp_history)} (converged: {self.icp_converged})"),
+                ("refinement iterations", len(self.refine_history)),
+                ("seconds", head["seconds"]),
+                ("meshcorr", self.version)]
+        cells = "".join(f"<tr><th style='text-align:left'>{html.escape(str(k))}</th>"
+                        f"<td style='text-align:left'>{html.escape(str(v))}</td></tr>" for k, v in rows)
+        return f"<table><caption>meshcorr.Correspondence</caption>{cells}</table>"
+
+    # ------------------------------------------------------------------ meshes and maps
+
+    def _meshes(self, what: str) -> tuple[Mesh, Mesh]:
+        if self.source is None or self.target is None:
+            raise ParameterError(f"{what} needs the meshes, which this result does not hold; compute it "
+                                 "with meshcorr.match or meshcorr.Matcher (they record them), or call "
+                                 "result.attach_meshes(source, target).")
+        return self.source, self.target
+
+    def local_map(self) -> np.ndarray:
+        """``(n1,)`` int: the map in the numbering of the matched meshes ``source`` / ``target``.
+
+        The same as :attr:`map` unless ``largest_component`` dropped
+        vertices; -1 where unmapped.
+        """
+        src, tgt = self._meshes("local_map")
+        to_local = np.full(tgt.n_original, -1, dtype=np.int64)
+        to_local[tgt.kept] = np.arange(tgt.n_vertices)
+        images = self.map[src.kept]
+        return np.where(images >= 0, to_local[np.maximum(images, 0)], -1)
+
+    def precise_map(self, *, k: int | None = None, n_nearest: int = 4):
+        """Each source vertex on a target triangle (:func:`meshcorr.precise.precise_map`).
+
+        Parameters
+        ----------
+        k : int, optional
+            Laplace-Beltrami basis size; default the refinement's (``params["refine_k"]``, else 30).
+        n_nearest : int
+            Target vertices whose triangles are searched.
+
+        Returns
+        -------
+        precise : meshcorr.precise.PreciseMap
+            In the input files' numbering (``faces`` index the target's triangles).
+        """
+        from .precise import precise_map
+
+        src, tgt = self._meshes("precise_map")
+        k = int(self.params.get("refine_k", 30)) if k is None else k
+        return precise_map(src, tgt, self.local_map(), k=k, n_nearest=n_nearest,
+                           random_state=self.params.get("random_state", 0))
+
+    def functional_map(self, k: int = 30, *, k_target: int | None = None):
+        """The map's functional map in Laplace-Beltrami bases of size ``k`` (:mod:`meshcorr.fmap`).
+
+        Returns
+        -------
+        fmap : meshcorr.fmap.FunctionalMap
+            ``C`` is ``(k, k_target)``: target coefficients to source
+            coefficients (pyFM's ``FM_12`` with mesh 1 = target, mesh 2 = source).
+        """
+        from .fmap import functional_map
+
+        src, tgt = self._meshes("functional_map")
+        return functional_map(src, tgt, self.local_map(), k, k_target=k_target,
+                              random_state=self.params.get("random_state", 0))
+
+    def transfer(self, values, *, precise: bool = False, fill=np.nan) -> np.ndarray:
+        """Carry per-vertex target values to the source (pull-back, :mod:`meshcorr.transfer`).
+
+        Parameters
+        ----------
+        values : (n_target,) or (n_target, c) array
+            E.g. labels, a scalar field, RGB colours, UV coordinates.
+        precise : bool
+            Interpolate barycentrically at the precise map's points
+            (:meth:`precise_map`) instead of copying each matched vertex's value.
+        fill : scalar
+            Value of unmapped source vertices (vertex map only).
+
+        Returns
+        -------
+        pulled : (n_source,) or (n_source, c) array
+        """
+        from .transfer import check_map, pull_back
+
+        values = np.asarray(values)
+        n_target = self.target.n_original if self.target is not None else None
+        if n_target is not None and len(values) != n_target:
+            raise ParameterError(f"transfer needs one value per target vertex ({n_target}); got {len(values)}.")
+        if precise:
+            return self.precise_map().interpolate(values)
+        check_map(self.map, len(self.map), len(values), name="the map")
+        return pull_back(values, self.map, fill=fill)
+
+    def inverse(self) -> "Correspondence":
+        """The map from the target back to the source.
+
+        Each target vertex goes to a source vertex whose image is the
+        target vertex nearest to it in space among all images (the source
+        vertex itself where it was reached; the nearest reached vertex's
+        source vertex elsewhere, so unreached target vertices are mapped too).
+
+        Returns
+        -------
+        inverse : Correspondence
+            ``method`` is ``"inverse of ..."``; meshes swapped.
+        """
+        from scipy.spatial import cKDTree
+
+        src, tgt = self._meshes("inverse")
+        mapped = np.flatnonzero(self.map >= 0)
+        if mapped.size == 0:
+            raise ParameterError("The map sends no source vertex anywhere; it has no inverse.")
+        images = self.map[mapped]
+        positions = np.zeros((tgt.n_original, 3))
+        positions[tgt.kept] = tgt.vertices
+        _, nearest = cKDTree(positions[images]).query(positions[tgt.kept])
+        full = np.full(tgt.n_original, -1, dtype=np.int64)
+        full[tgt.kept] = mapped[nearest]
+        return Correspondence(map=full, method=f"inverse of {self.method}", source_vertices=tgt.kept.copy(),
+                              target_vertices=src.kept.copy(), params=dict(self.params), source=tgt, target=src)
+
+    def compose(self, other: "Correspondence") -> "Correspondence":
+        """This map followed by ``other``: source -> (this target = other's source) -> other's target.
+
+        Raises
+        ------
+        ParameterError
+            If ``other`` starts on a mesh with another vertex count than this map's target.
+        """
+        n_mid = self.target.n_original if self.target is not None else None
+        if n_mid is not None and len(other.map) != n_mid:
+            raise ParameterError(f"Cannot compose: this map's target has {n_mid} vertices but the other map "
+                                 f"starts on a mesh with {len(other.map)}; compose maps A->B then B->C.")
+        valid = (self.map >= 0) & (self.map < len(other.map))
+        full = np.full(len(self.map), -1, dtype=np.int64)
+        full[valid] = other.map[self.map[valid]]
+        return Correspondence(map=full, method=f"{self.method} then {other.method}",
+                              params={"first": self.params, "second": other.params},
+                              source=self.source, target=other.target)
+
+    # ------------------------------------------------------------------ evaluation and viewing
+
+    def evaluate(self, truth, *, sym_truth=None, geodesic: str = "heat") -> dict:
+        """Score the map: geodesic error against ground truth, and coverage, bijectivity, continuity.
+
+        Parameters
+        ----------
+        truth : GroundTruth or (n_source,) int
+            True pairs, or a dense true map (``truth[i]`` = true target vertex of source vertex i).
+        sym_truth : GroundTruth or (n_source,) int, optional
+            The mirrored truth.
+        geodesic : str
+            Geodesic solver of the errors.
+
+        Returns
+        -------
+        report : dict
+            :func:`meshcorr.evaluation.evaluate_map`'s report (without the
+            per-point arrays) and :func:`meshcorr.evaluation.map_quality`'s measures.
+        """
+        from .evaluation import evaluate_map, map_quality, scalar_summary
+        from .ground_truth import GroundTruth
+
+        src, tgt = self._meshes("evaluate")
+
+        def as_truth(t):
+            if t is None or isinstance(t, GroundTruth):
+                return t
+            t = np.asarray(t)
+            return GroundTruth(np.arange(len(t)), t, description="the true map")
+
+        full_target = tgt if tgt.n_vertices == tgt.n_original else None
+        if full_target is None:
+            raise ParameterError("evaluate needs the whole target mesh; this map was computed on its largest "
+                                 "component: use meshcorr.evaluation.evaluate_map with the target file.")
+        report = scalar_summary(evaluate_map(tgt, self.map, as_truth(truth), sym_truth=as_truth(sym_truth),
+                                             geodesic=geodesic))
+        report.update(map_quality(src, tgt, self.local_map()))
+        return report
+
+    def show(self, **options):
+        """Source and target side by side with linked colours (:func:`meshcorr.viz.notebook.show`)."""
+        from .viz.notebook import show
+
+        src, tgt = self._meshes("show")
+        return show(src, tgt, self.local_map(), **options)
+
+    # ------------------------------------------------------------------ files
+
+    def save(self, path: str | os.PathLike) -> None:
+        """Write the whole result, meshes included, to one ``.npz`` file (atomically).
+
+        :meth:`load` reads it back; arrays as they are, the rest as JSON.
+        """
+        from .io import atomic_write
+
+        arrays = {name: getattr(self, name) for name in _ARRAYS if getattr(self, name) is not None}
+        for role in ("source", "target"):
+            mesh = getattr(self, role)
+            if mesh is not None:
+                arrays.update({f"{role}_mesh_vertices": mesh.vertices, f"{role}_mesh_faces": mesh.faces,
+                               f"{role}_mesh_kept": mesh.kept,
+                               f"{role}_mesh_n_original": np.array(mesh.n_original)})
+        for role, values in self.eigenvalues.items():
+            arrays[f"eigenvalues_{role}"] = np.asarray(values)
+        rest = {f.name: getattr(self, f.name) for f in fields(self)
+                if f.name not in _ARRAYS and f.name not in _SPECIAL}
+        rest["configuration"] = self.configuration.to_dict() if self.configuration else None
+        rest["alternatives"] = [c.to_dict() for c in self.alternatives]
+        text = json.dumps(rest, default=_json_default)
+        arrays["json"] = np.frombuffer(text.encode(), dtype=np.uint8)
+        atomic_write(path, lambda file: np.savez_compressed(file, **arrays))
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> "Correspondence":
+        """Read a result written by :meth:`save`.
+
+        Raises
+        ------
+        ParameterError
+            If the file is missing or is no saved result.
+        """
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                arrays = {name: np.asarray(data[name]) for name in data.files}
+        except FileNotFoundError as exc:
+            raise ParameterError(f"{path}: no such file.") from exc
+        except (OSError, ValueError) as exc:
+            raise ParameterError(f"{path} is not a saved meshcorr result (.npz): {exc}.") from exc
+        if "json" not in arrays or "map" not in arrays:
+            raise ParameterError(f"{path} is not a saved meshcorr result: it lacks the map or its metadata.")
+        rest = json.loads(arrays.pop("json").tobytes().decode())
+        configuration = rest.pop("configuration")
+        to_config = lambda d: Configuration(tuple(d["perm"]), tuple(d["signs"]), d["cost"])  # noqa: E731
+        rest["configuration"] = to_config(configuration) if configuration else None
+        rest["alternatives"] = [to_config(d) for d in rest["alternatives"]]
+        meshes = {}
+        for role in ("source", "target"):
+            if f"{role}_mesh_vertices" in arrays:
+                meshes[role] = Mesh(arrays.pop(f"{role}_mesh_vertices"), arrays.pop(f"{role}_mesh_faces"),
+                                    name=role, kept=arrays.pop(f"{role}_mesh_kept"),
+                                    n_original=int(arrays.pop(f"{role}_mesh_n_original")))
+        eigenvalues = {key[len("eigenvalues_"):]: arrays.pop(key) for key in list(arrays)
+                       if key.startswith("eigenvalues_")}
+        return cls(**arrays, **rest, **meshes, eigenvalues=eigenvalues)
+
+
+def _json_default(value):
+    """JSON for numpy scalars and arrays in params and histories."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    raise TypeError(f"cannot write {type(value).__name__} to JSON")

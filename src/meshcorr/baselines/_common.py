@@ -67,4 +67,5 @@ def finish(method: str, src: Mesh, tgt: Mesh, local_map: np.ndarray, local_cost:
         full_cost = np.full(src.n_original, np.nan)
         full_cost[src.kept] = local_cost
     return Correspondence(map=full_map, cost=full_cost, method=method, source_vertices=src.kept.copy(),
-                          target_vertices=tgt.kept.copy(), timings=timer.timings, params=params, **fields)
+                          target_vertices=tgt.kept.copy(), timings=timer.timings, params=params,
+                          source=src, target=tgt, **fields)

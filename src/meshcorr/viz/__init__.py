@@ -8,6 +8,16 @@
   eigenvectors, the spectral embedding.
 - :mod:`meshcorr.viz.report` -- a self-contained interactive HTML report;
   numpy only, its viewer is inline JavaScript.
+- :mod:`meshcorr.viz.notebook` -- :func:`show`: both meshes side by side in
+  a notebook (``pip install meshcorr[notebook]``, plotly).
 
-Nothing here is imported by ``import meshcorr``; import the submodules.
+``import meshcorr`` imports this package but none of its submodules (they
+load matplotlib or plotly on first use); :func:`show` imports its own.
 """
+
+
+def show(source, target, mapping, **options):
+    """Source and target side by side with linked colours (:func:`meshcorr.viz.notebook.show`)."""
+    from .notebook import show as _show
+
+    return _show(source, target, mapping, **options)

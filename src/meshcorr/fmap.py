@@ -15,7 +15,9 @@ eigenfunctions of each mesh, :math:`\\Phi_S` and :math:`\\Phi_T`, the
 which maps the coefficients of a target function to those of its pull-back
 on the source (:math:`a_S = C a_T`); :math:`M_S` is the lumped (barycentric)
 mass matrix and the bases are :math:`M`-orthonormal,
-:math:`\\Phi^\\top M \\Phi = I`, in the meshes' own units. Back to a vertex
+:math:`\\Phi^\\top M \\Phi = I`, each mesh scaled to unit area (as pyFM's
+``TriMesh(..., area_normalize=True)``), so that :math:`C` is orthogonal for
+an isometry whatever the meshes' sizes. Back to a vertex
 map: :math:`T(i) = \\arg\\min_j \\lVert (\\Phi_S C)_i - (\\Phi_T)_j \\rVert`.
 
 Conventions compared with pyFM: pyFM's ``p2p_21[i]`` is the vertex of mesh 1
@@ -45,7 +47,7 @@ __all__ = ["FunctionalMap", "laplace_beltrami", "functional_map", "point_map"]
 
 def laplace_beltrami(mesh: Mesh, k: int, *, random_state: int | None = 0
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The first ``k`` Laplace-Beltrami eigenpairs in the mesh's own units, and its mass.
+    """The first ``k`` Laplace-Beltrami eigenpairs of the mesh scaled to unit area, and its mass.
 
     Parameters
     ----------
@@ -58,18 +60,18 @@ def laplace_beltrami(mesh: Mesh, k: int, *, random_state: int | None = 0
     Returns
     -------
     eigenvalues : (k,) float
-        Ascending, of :math:`L \\phi = \\lambda M \\phi` with the mesh's area.
-    basis : (n, k) float
-        :math:`\\Phi^\\top M \\Phi = I` for the mass below.
+        Ascending, of :math:`L \\phi = \\lambda M \\phi` (cotangent Laplacian, unit area).
+    basis : (n, k) float, read-only
+        :math:`\\Phi^\\top M \\Phi = I` for the mass below; signs by
+        :func:`meshcorr.embedding.sign_convention` (:func:`meshcorr.refine.laplace_basis`).
     mass : (n,) float
-        Lumped (barycentric) vertex areas; they sum to the surface area.
+        Lumped (barycentric) vertex areas divided by the total area: they sum to 1.
     """
     import potpourri3d as pp3d
 
-    values, unit_basis = laplace_basis(mesh, k, random_state=random_state)  # unit total area
+    values, basis = laplace_basis(mesh, k, random_state=random_state)
     mass = pp3d.vertex_areas(np.asarray(mesh.vertices), np.asarray(mesh.faces))
-    area = float(mass.sum())
-    return np.asarray(values) / area, np.asarray(unit_basis) / np.sqrt(area), mass
+    return values, basis, mass / mass.sum()
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,180 @@
+"""The staged API (Matcher, Settings) and the result object (issue 14, items 1-2 and 7)."""
+
+import dataclasses
+import inspect
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import meshcorr
+from meshcorr import Correspondence, Matcher, Settings
+from meshcorr import datasets as ds
+from meshcorr.errors import ParameterError
+from meshcorr.progress import TqdmProgress, as_progress
+
+
+@pytest.fixture(scope="module")
+def shape():
+    return ds.tube(n_along=26, n_around=12)
+
+
+@pytest.fixture(scope="module")
+def copy_and_truth(shape):
+    return ds.rigid_copy(shape, scale=2.0, random_state=3)
+
+
+@pytest.fixture(scope="module")
+def result(shape, copy_and_truth):
+    return Matcher(refine=False).fit(shape, copy_and_truth[0])
+
+
+# ---------------------------------------------------------------- settings
+
+
+def test_settings_cover_every_option_of_match():
+    names = {f.name for f in dataclasses.fields(Settings)}
+    options = set(inspect.signature(meshcorr.match).parameters) - {"source", "target", "progress"}
+    renamed = {"n_landmarks": "n_samples"}
+    assert {renamed.get(o, o) for o in options} - names == set()
+    defaults = Settings()
+    for name, parameter in inspect.signature(meshcorr.match).parameters.items():
+        if renamed.get(name, name) in names and name != "max_memory":
+            assert getattr(defaults, renamed.get(name, name)) == parameter.default, name
+
+
+def test_options_the_method_does_not_use_raise_naming_them():
+    with pytest.raises(ParameterError, match="'icp' does not use the options 'k', 'n_anchors', 'symmetry'"):
+        Settings(method="icp", k=9, symmetry="mirror", n_anchors=7)
+    with pytest.raises(ParameterError, match="'spectral' does not use the option 'prealign'"):
+        Matcher(prealign=False).get_params()
+    assert Settings(method="icp", prealign=False, bijective=True).changed() == {
+        "method": "icp", "prealign": False, "bijective": True}
+
+
+def test_unknown_setting_and_bad_method_and_landmarks_raise():
+    with pytest.raises(ParameterError, match="Unknown setting 'n_landmarks'.*now 'n_samples'"):
+        Settings.from_options(n_landmarks=40)
+    with pytest.raises(ParameterError, match="'method' parameter must be one of"):
+        Settings(method="procrustes")
+    with pytest.raises(ParameterError, match="'landmarks' parameter must be"):
+        Settings(landmarks=[1, 2, 3])
+
+
+def test_settings_values_are_checked_when_fit_runs(shape):
+    with pytest.raises(ParameterError, match="'k' parameter must be an int <= 10"):
+        Matcher(k=12).fit(shape, shape)
+
+
+def test_matcher_get_set_params_and_repr():
+    matcher = Matcher(k=5)
+    assert matcher.get_params()["k"] == 5 and matcher.get_params()["method"] == "spectral"
+    matcher.set_params(refine=False)
+    assert repr(matcher) == "Matcher(k=5, refine=False)"
+    assert Matcher(Settings(k=4), k=3).get_params()["k"] == 3
+
+
+def test_matcher_gives_match_s_map(result, shape, copy_and_truth):
+    copy, truth = copy_and_truth
+    np.testing.assert_array_equal(result.map, truth)
+    direct = meshcorr.match(shape, copy, refine=False)
+    np.testing.assert_array_equal(direct.map, result.map)
+
+
+def test_progress_true_draws_a_bar_and_bad_progress_raises(shape, copy_and_truth, capsys):
+    bar = TqdmProgress(file=sys.stderr)
+    meshcorr.match(shape, copy_and_truth[0], refine=False, icp_iterations=0, progress=bar)
+    bar.close()
+    assert {"load", "geodesics", "reorder"} <= set(bar.stages)
+    assert "meshcorr: " in capsys.readouterr().err
+    with pytest.raises(ParameterError, match="'progress' parameter must be True"):
+        as_progress("yes")
+
+
+# ---------------------------------------------------------------- the result
+
+
+def test_repr_is_compact_and_html_is_a_table(result, shape):
+    text = repr(result)
+    assert len(text) < 300 and text.startswith("Correspondence(method='spectral'")
+    assert f"n_source={shape.n_vertices}" in text and "version=" in text
+    page = result._repr_html_()
+    assert page.startswith("<table>") and "target vertices reached" in page and len(page) < 3000
+
+
+def test_version_is_recorded_and_cost_is_none_after_refinement(result, shape, copy_and_truth):
+    assert result.params["meshcorr_version"] == meshcorr.__version__ == result.summary()["meshcorr_version"]
+    assert np.isfinite(result.cost).all()  # refine=False: the proximity matching's cost
+    refined = meshcorr.match(shape, copy_and_truth[0], icp_iterations=0)
+    assert refined.cost is None and refined.summary()["mean_cost"] is None
+
+
+def test_save_and_load_round_trip(result, tmp_path):
+    path = tmp_path / "result.npz"
+    result.save(path)
+    loaded = Correspondence.load(path)
+    np.testing.assert_array_equal(loaded.map, result.map)
+    np.testing.assert_allclose(loaded.source_embedding, result.source_embedding)
+    assert loaded.configuration == result.configuration and loaded.alternatives == result.alternatives
+    np.testing.assert_array_equal(loaded.target.faces, result.target.faces)
+    assert json.dumps(loaded.summary()) == json.dumps(result.summary())
+
+
+def test_load_rejects_other_files(tmp_path):
+    with pytest.raises(ParameterError, match="no such file"):
+        Correspondence.load(tmp_path / "none.npz")
+    np.savez(tmp_path / "other.npz", x=np.zeros(3))
+    with pytest.raises(ParameterError, match="not a saved meshcorr result"):
+        Correspondence.load(tmp_path / "other.npz")
+    (tmp_path / "text.npz").write_text("hello")
+    with pytest.raises(ParameterError, match="not a saved meshcorr result"):
+        Correspondence.load(tmp_path / "text.npz")
+
+
+def test_evaluate_transfer_inverse_compose(result, copy_and_truth, shape):
+    _, truth = copy_and_truth
+    report = result.evaluate(truth)
+    assert report["mean_error"] == pytest.approx(0.0, abs=1e-12)
+    assert report["coverage"] == pytest.approx(1.0) and report["bijectivity"] == pytest.approx(1.0)
+    values = np.arange(shape.n_vertices) * 2.0
+    np.testing.assert_array_equal(result.transfer(values), values[truth])
+    inverse = result.inverse()
+    np.testing.assert_array_equal(inverse.map, np.argsort(truth))
+    np.testing.assert_array_equal(result.compose(inverse).map, np.arange(shape.n_vertices))
+    with pytest.raises(ParameterError, match="one value per target vertex"):
+        result.transfer(values[:-1])
+    with pytest.raises(ParameterError, match="Cannot compose"):
+        result.compose(Correspondence(map=np.zeros(3, dtype=np.int64)))
+
+
+def test_methods_needing_meshes_say_how_to_get_them():
+    bare = Correspondence(map=np.arange(4))
+    for call in (bare.inverse, bare.show, bare.precise_map, lambda: bare.evaluate(np.arange(4))):
+        with pytest.raises(ParameterError, match="needs the meshes"):
+            call()
+
+
+def test_baseline_results_keep_their_meshes_too(shape, copy_and_truth):
+    icp = meshcorr.match(shape, copy_and_truth[0], method="icp")
+    assert icp.target is not None and icp.evaluate(copy_and_truth[1])["mean_error"] < 1e-9
+
+
+# ---------------------------------------------------------------- the house
+
+
+def test_pipeline_and_baselines_no_longer_import_each_other():
+    code = ("import sys, meshcorr.pipeline; "
+            "assert 'meshcorr.baselines' not in sys.modules, 'pipeline imported the baselines'")
+    subprocess.run([sys.executable, "-c", code], check=True)
+    import meshcorr.baselines as baselines
+    from meshcorr import methods
+
+    assert baselines.run_method is methods.run_method and baselines.METHODS == methods.METHOD_NAMES
+
+
+def test_import_meshcorr_exposes_the_submodules():
+    for name in ("evaluation", "transfer", "viz", "fmap", "precise", "datasets", "progress"):
+        assert hasattr(meshcorr, name), name
+    assert callable(meshcorr.viz.show) and callable(meshcorr.progress.StderrProgress)

@@ -16,12 +16,13 @@ from ..errors import MeshcorrError
 from . import bench as _bench
 from . import embed as _embed
 from . import evaluate as _evaluate
+from . import maps as _maps
 from . import match as _match
 from . import show as _show
 from . import transfer as _transfer
 
 #: Sub-command modules, in the order ``--help`` lists them.
-COMMANDS = [_match, _evaluate, _bench, _show, _transfer, _embed]
+COMMANDS = [_match, _evaluate, _bench, _show, _transfer, _maps, _embed]
 
 EXIT_USAGE = 2
 EXIT_ERROR = 1

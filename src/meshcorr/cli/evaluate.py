@@ -16,7 +16,11 @@ written by 'meshcorr match'; or a .npy array) against ground truth, with the
 Princeton protocol (Kim et al. 2011): for each ground-truth pair, the geodesic
 distance on TARGET between the predicted and the true vertex, divided by
 sqrt(area of TARGET). Prints the mean error, the fraction of points under
-each threshold and the paper's total geodesic error (the plain sum).
+each threshold and the paper's total geodesic error (the plain sum), and
+measures that need no truth: coverage (share of TARGET's area reached),
+bijectivity (distinct images / mapped vertices) and continuity (mean ratio of
+an edge's image length to its length, both over sqrt(area); about 1 for a
+smooth map, larger where the map tears).
 
 Ground truth (--gt):
   identity          vertex i <-> vertex i (meshes with one connectivity)
@@ -72,10 +76,10 @@ def _sym_spec(gt: list[str], sym: list[str]) -> list[str]:
 
 def run(args) -> int:
     from ..errors import ParameterError
-    from ..evaluation import cumulative_curve, evaluate_map, scalar_summary
+    from ..evaluation import cumulative_curve, evaluate_map, map_quality, scalar_summary
     from ..ground_truth import load_ground_truth
     from ..io import read_map, read_mesh
-    from ..mesh import as_mesh
+    from ..mesh import Mesh, as_mesh
     from .match import check_output_path
 
     thresholds = _thresholds(args.thresholds)
@@ -84,7 +88,8 @@ def run(args) -> int:
 
         check_output_path(args.curve)
         require_matplotlib()
-    n_source = len(read_mesh(args.source, name=args.source)[0])
+    source = read_mesh(args.source, name=args.source)
+    n_source = len(source[0])
     target = as_mesh(args.target)
     mapping = read_map(args.map)
     if mapping.size != n_source:
@@ -103,6 +108,7 @@ def run(args) -> int:
             curves["mirrored truth"] = cumulative_curve(report["sym_errors"])
         plot_cumulative_curves(args.curve, curves, title=f"{args.map} on {args.target}")
     summary = scalar_summary(report)
+    summary.update(map_quality(Mesh(*source, name=args.source), target, mapping))
     summary.update(source=args.source, target=args.target, map=args.map, geodesic=args.geodesic)
     if args.json:
         json.dump(summary, sys.stdout, indent=2)
@@ -116,6 +122,10 @@ def run(args) -> int:
     print(f"under {' / '.join(report['under'])}: {under}")
     print(f"total geodesic error:  {report['total_error']:.6g} (TARGET units; "
           f"{report['total_error_normalized']:.4g} normalised)")
+    print(f"coverage:              {100 * summary['coverage']:.1f} % of TARGET's area reached; "
+          f"bijectivity {summary['bijectivity']:.3f}")
+    print(f"continuity:            {summary['continuity']:.3f} (edge-length ratio; "
+          f"{100 * summary['torn_edges']:.1f} % of edges torn)")
     if sym is not None:
         verdict = "FLIPPED (closer to the mirrored truth)" if report["flipped"] else "not flipped"
         print(f"vs mirrored truth:     {report['sym_mean_error']:.4f} -> {verdict}")

@@ -121,10 +121,9 @@ class FunctionalMap:
 
     def save(self, path: str | os.PathLike) -> None:
         """Write every array to one ``.npz`` file, atomically (names as the attributes)."""
-        from .io import atomic_write
+        from .io import write_npz
 
-        arrays = {name: getattr(self, name) for name in self.__dataclass_fields__}
-        atomic_write(path, lambda file: np.savez(file, **arrays))
+        write_npz(path, {name: getattr(self, name) for name in self.__dataclass_fields__})
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> "FunctionalMap":
@@ -135,16 +134,14 @@ class FunctionalMap:
         ParameterError
             If the file is missing, unreadable, lacks an array or its shapes disagree.
         """
-        try:
-            with np.load(path) as data:
-                arrays = {name: np.asarray(data[name]) for name in cls.__dataclass_fields__}
-        except FileNotFoundError as exc:
-            raise ParameterError(f"{path}: no such file.") from exc
-        except KeyError as exc:
-            raise ParameterError(f"{path} lacks the array {exc}; a functional map file holds "
-                                 f"{', '.join(cls.__dataclass_fields__)}.") from exc
-        except (OSError, ValueError) as exc:
-            raise ParameterError(f"{path} is not a functional map file (.npz): {exc}.") from exc
+        from .io import read_npz
+
+        arrays = read_npz(path, "a functional map file")  # ParameterError if missing or unreadable
+        missing = [name for name in cls.__dataclass_fields__ if name not in arrays]
+        if missing:
+            raise ParameterError(f"{path} lacks the array {missing[0]!r}; a functional map file holds "
+                                 f"{', '.join(cls.__dataclass_fields__)}.")
+        arrays = {name: arrays[name] for name in cls.__dataclass_fields__}
         C, phi_s, phi_t = arrays["C"], arrays["source_basis"], arrays["target_basis"]
         if C.ndim != 2 or phi_s.ndim != 2 or phi_t.ndim != 2 or C.shape != (phi_s.shape[1], phi_t.shape[1]):
             raise ParameterError(f"{path}: C has shape {C.shape} but the bases have shapes {phi_s.shape} "

@@ -365,3 +365,26 @@ def write_mesh(path, vertices, faces, vertex_colors=None) -> None:
     data = mesh.export(file_type=fmt.lower())
     payload = data if isinstance(data, bytes) else data.encode("utf-8")
     atomic_write(path, lambda file: file.write(payload))
+
+
+def read_npz(path, what: str) -> dict[str, np.ndarray]:
+    """Every array of an ``.npz`` file (no pickles), or a :class:`ParameterError` naming ``what`` was expected.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    what : str
+        What the file should hold, for messages (e.g. "a saved meshcorr result").
+    """
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return {name: np.asarray(data[name]) for name in data.files}
+    except FileNotFoundError as exc:
+        raise ParameterError(f"{path}: no such file.") from exc
+    except (OSError, ValueError) as exc:
+        raise ParameterError(f"{path} is not {what} (.npz): {exc}.") from exc
+
+
+def write_npz(path, arrays: dict) -> None:
+    """Write named arrays to one compressed ``.npz`` file, atomically (read back by :func:`read_npz`)."""
+    atomic_write(path, lambda file: np.savez_compressed(file, **arrays))

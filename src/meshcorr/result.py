@@ -393,7 +393,7 @@ class Correspondence:
 
         :meth:`load` reads it back; arrays as they are, the rest as JSON.
         """
-        from .io import atomic_write
+        from .io import write_npz
 
         arrays = {name: getattr(self, name) for name in _ARRAYS if getattr(self, name) is not None}
         for role in ("source", "target"):
@@ -409,8 +409,7 @@ class Correspondence:
         rest["configuration"] = self.configuration.to_dict() if self.configuration else None
         rest["alternatives"] = [c.to_dict() for c in self.alternatives]
         text = json.dumps(rest, default=_json_default)
-        arrays["json"] = np.frombuffer(text.encode(), dtype=np.uint8)
-        atomic_write(path, lambda file: np.savez_compressed(file, **arrays))
+        write_npz(path, {**arrays, "json": np.frombuffer(text.encode(), dtype=np.uint8)})
 
     @classmethod
     def load(cls, path: str | os.PathLike) -> "Correspondence":
@@ -421,13 +420,9 @@ class Correspondence:
         ParameterError
             If the file is missing or is no saved result.
         """
-        try:
-            with np.load(path, allow_pickle=False) as data:
-                arrays = {name: np.asarray(data[name]) for name in data.files}
-        except FileNotFoundError as exc:
-            raise ParameterError(f"{path}: no such file.") from exc
-        except (OSError, ValueError) as exc:
-            raise ParameterError(f"{path} is not a saved meshcorr result (.npz): {exc}.") from exc
+        from .io import read_npz
+
+        arrays = read_npz(path, "a saved meshcorr result")
         if "json" not in arrays or "map" not in arrays:
             raise ParameterError(f"{path} is not a saved meshcorr result: it lacks the map or its metadata.")
         rest = json.loads(arrays.pop("json").tobytes().decode())

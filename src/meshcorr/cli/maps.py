@@ -28,26 +28,33 @@ instead (the nearest TARGET row of Phi_S C for each SOURCE vertex).
 """
 
 
+#: The arguments both commands share: (flags, options).
+_INPUTS = (
+    (("source",), dict(metavar="SOURCE", help="mesh whose vertices were mapped")),
+    (("target",), dict(metavar="TARGET", help="mesh they were mapped onto (texture: an OBJ with UVs)")),
+)
+
+
 def add_parser(sub) -> None:
-    t = sub.add_parser("texture", help=TEXTURE_HELP, description=TEXTURE_DESCRIPTION,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
-    t.add_argument("source", metavar="SOURCE", help="mesh whose vertices were mapped")
-    t.add_argument("target", metavar="TARGET.obj", help="textured mesh they were mapped onto")
-    t.add_argument("map", metavar="MAP", help="the vertex map (.txt one index per line, or .npy)")
-    t.add_argument("-o", "--output", required=True, metavar="OUT.obj", help="SOURCE with the carried UVs")
-    t.add_argument("-k", type=int, default=40, help="Laplace-Beltrami basis size of the precise map (40)")
-    t.set_defaults(run=run_texture)
-    f = sub.add_parser("fmap", help=FMAP_HELP, description=FMAP_DESCRIPTION,
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
-    f.add_argument("source", metavar="SOURCE")
-    f.add_argument("target", metavar="TARGET")
-    f.add_argument("map", metavar="MAP", nargs="?", help="the vertex map to export")
-    f.add_argument("-o", "--output", required=True, metavar="OUT",
-                   help="the functional map (.npz), or with --to-map the vertex map (.txt/.npy)")
-    f.add_argument("-k", type=int, default=30, help="basis size (30)")
-    f.add_argument("--to-map", metavar="FMAP.npz", help="import this functional map as a vertex map")
-    f.add_argument("--seed", type=int, default=0, help="seed of the eigensolvers (0)")
-    f.set_defaults(run=run_fmap)
+    commands = {
+        "texture": (TEXTURE_HELP, TEXTURE_DESCRIPTION, run_texture,
+                    [(("map",), dict(metavar="MAP", help="the vertex map (.txt or .npy)")),
+                     (("-o", "--output"), dict(required=True, metavar="OUT.obj", help="SOURCE with the carried UVs")),
+                     (("-k",), dict(type=int, default=40, help="basis size of the precise map (40)"))]),
+        "fmap": (FMAP_HELP, FMAP_DESCRIPTION, run_fmap,
+                 [(("map",), dict(metavar="MAP", nargs="?", help="the vertex map to export")),
+                  (("-o", "--output"), dict(required=True, metavar="OUT", help="the functional map (.npz), "
+                                            "or with --to-map the vertex map (.txt/.npy)")),
+                  (("-k",), dict(type=int, default=30, help="basis size (30)")),
+                  (("--to-map",), dict(metavar="FMAP.npz", help="import this functional map as a vertex map")),
+                  (("--seed",), dict(type=int, default=0, help="seed of the eigensolvers (0)"))]),
+    }
+    for name, (help_text, description, run, arguments) in commands.items():
+        parser = sub.add_parser(name, help=help_text, description=description,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+        for flags, options in _INPUTS + tuple(arguments):
+            parser.add_argument(*flags, **options)
+        parser.set_defaults(run=run)
 
 
 def _inputs(args, target_mesh=None):

@@ -126,14 +126,16 @@ def project_to_triangles(q: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndar
         t_ac = np.clip(r1 / g11, 0.0, 1.0)
         ebc = c - b
         u_bc = np.clip(np.einsum("ij,ij->i", q - b, ebc) / np.einsum("ij,ij->i", ebc, ebc), 0.0, 1.0)
-    # (s, t): weights of b and c, one row per candidate
-    candidates = np.stack([np.where(inside, s_in, 0.0), np.nan_to_num(s_ab), np.zeros_like(r0),
-                           1.0 - np.nan_to_num(u_bc)], axis=1), \
-        np.stack([np.where(inside, t_in, 0.0), np.zeros_like(r0), np.nan_to_num(t_ac),
-                  np.nan_to_num(u_bc)], axis=1)
-    s, t = candidates
-    points = a[:, None, :] + s[..., None] * e0[:, None, :] + t[..., None] * e1[:, None, :]
-    distance2 = np.sum((points - q[:, None, :]) ** 2, axis=2)
+    # (s, t): weights of b and c for the four candidates (inside, edges ab, ac, bc)
+    s = np.stack([np.where(inside, s_in, 0.0), np.nan_to_num(s_ab), np.zeros_like(r0), 1.0 - np.nan_to_num(u_bc)],
+                 axis=1)
+    t = np.stack([np.where(inside, t_in, 0.0), np.zeros_like(r0), np.nan_to_num(t_ac), np.nan_to_num(u_bc)],
+                 axis=1)
+    # |d - s e0 - t e1|^2 from the Gram entries: no (p, 4, dim) array
+    dd = np.einsum("ij,ij->i", d, d)[:, None]
+    distance2 = (dd - 2 * s * r0[:, None] - 2 * t * r1[:, None] + s * s * g00[:, None]
+                 + 2 * s * t * g01[:, None] + t * t * g11[:, None])
+    distance2 = np.maximum(distance2, 0.0)
     distance2[:, 0] = np.where(inside, distance2[:, 0], np.inf)
     best = np.argmin(distance2, axis=1)
     rows = np.arange(len(q))
@@ -179,14 +181,18 @@ def precise_map(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 30,
     phi = fmap.target_basis
     faces = np.asarray(target.faces)
     n_nearest = min(n_nearest, target.n_vertices)
-    _, nearest = cKDTree(phi).query(queries, k=n_nearest)
+    _, nearest = cKDTree(phi).query(queries, k=n_nearest, workers=-1)
     nearest = nearest.reshape(len(mapped), n_nearest)
     order, start = _vertex_faces(faces, target.n_vertices)
     counts = (start[1:] - start[:-1])[nearest]  # faces around each candidate vertex
     query_of = np.repeat(np.repeat(np.arange(len(mapped)), n_nearest), counts.reshape(-1))
-    offsets = np.concatenate([np.arange(start[v], start[v + 1]) for v in nearest.reshape(-1)]) \
-        if len(mapped) else np.empty(0, dtype=np.int64)
-    candidate = order[offsets]
+    # the incident faces of every candidate vertex, gathered without a Python loop
+    firsts = np.repeat(start[nearest.reshape(-1)], counts.reshape(-1))
+    within = np.arange(len(firsts)) - np.repeat(np.cumsum(counts.reshape(-1)) - counts.reshape(-1), counts.reshape(-1))
+    candidate = order[firsts + within]
+    # a face around several candidate vertices is projected once
+    key = np.unique(query_of * len(faces) + candidate)
+    query_of, candidate = key // len(faces), key % len(faces)
     corners = faces[candidate]
     weights, distance2 = project_to_triangles(queries[query_of], phi[corners[:, 0]], phi[corners[:, 1]],
                                               phi[corners[:, 2]])

@@ -178,3 +178,53 @@ def test_import_meshcorr_exposes_the_submodules():
     for name in ("evaluation", "transfer", "viz", "fmap", "precise", "datasets", "progress"):
         assert hasattr(meshcorr, name), name
     assert callable(meshcorr.viz.show) and callable(meshcorr.progress.StderrProgress)
+
+
+def test_landmarks_pass_through_or_say_they_are_not_supported_yet(shape, copy_and_truth):
+    pairs = [(0, int(copy_and_truth[1][0]))]
+    if "landmarks" in inspect.signature(meshcorr.match).parameters:
+        assert Settings(landmarks=pairs).as_dict()["landmarks"] == [list(pairs[0])]
+        result = Matcher(landmarks=pairs, refine=False).fit(shape, copy_and_truth[0])
+        assert result.map[0] == copy_and_truth[1][0]
+    else:
+        with pytest.raises(ParameterError, match="does not take landmarks yet"):
+            Settings(landmarks=pairs)
+
+
+def test_progress_true_without_tqdm_says_how_to_install_it(monkeypatch):
+    monkeypatch.setitem(sys.modules, "tqdm.auto", None)  # import fails
+    with pytest.raises(ParameterError, match=r"pip install meshcorr\[notebook\]"):
+        as_progress(True)
+
+
+def test_largest_component_results_keep_the_input_numbering():
+    shape = ds.figure()
+    copy, truth = ds.rigid_copy(shape, random_state=1)
+    tet_v = np.array([[10, 10, 10], [11, 10, 10], [10, 11, 10], [10, 10, 11.0]])
+    tet_f = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+
+    def with_tetrahedron(s):
+        return np.vstack([s.vertices, tet_v]), np.vstack([s.faces, tet_f + s.n_vertices])
+
+    n = shape.n_vertices
+    result = Matcher(largest_component=True, refine=False).fit(with_tetrahedron(shape), with_tetrahedron(copy))
+    np.testing.assert_array_equal(result.map, np.r_[truth, [-1] * 4])
+    precise = result.precise_map()
+    np.testing.assert_array_equal(precise.vertex_map(), np.r_[truth, [-1] * 4])
+    np.testing.assert_array_equal(result.inverse().map, np.r_[np.argsort(truth), [-1] * 4])
+    with pytest.raises(ParameterError, match="needs the whole target mesh"):
+        result.evaluate(np.r_[truth, [0] * 4])
+    assert len(result.show().data[0].x) == n
+
+
+def test_inverse_of_an_empty_map_raises(shape):
+    empty = Correspondence(map=np.full(shape.n_vertices, -1), source=meshcorr.as_mesh(shape),
+                           target=meshcorr.as_mesh(shape))
+    with pytest.raises(ParameterError, match="no inverse"):
+        empty.inverse()
+
+
+def test_settings_replace_validates_again():
+    assert Settings(k=5).replace(refine=False).changed() == {"k": 5, "refine": False}
+    with pytest.raises(ParameterError, match="'icp' does not use the option 'k'"):
+        Settings(k=5).replace(method="icp")

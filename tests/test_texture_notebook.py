@@ -1,5 +1,7 @@
 """Texture transfer through a precise map, and notebook views (issue 14, items 3 and 6)."""
 
+import sys
+
 import numpy as np
 import pytest
 import trimesh
@@ -110,3 +112,25 @@ def test_notebook_view_errors(pair):
         meshcorr.viz.show(shape, copy, truth[:-1])
     with pytest.raises(ParameterError, match="one RGB row per target vertex"):
         meshcorr.viz.show(shape, copy, truth, colors=np.zeros((3, 3)))
+
+
+def test_obj_with_uvs_but_no_image_is_refused(tmp_path):
+    (tmp_path / "bare.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n")
+    with pytest.raises(MeshError, match="names no texture image"):
+        read_textured_obj(tmp_path / "bare.obj")
+
+
+def test_notebook_view_without_plotly_says_how_to_install_it(pair, monkeypatch):
+    shape, copy, truth = pair
+    monkeypatch.setitem(sys.modules, "plotly.graph_objects", None)
+    with pytest.raises(ParameterError, match=r"pip install 'meshcorr\[notebook\]'"):
+        meshcorr.viz.show(shape, copy, truth)
+
+
+def test_correspondence_figure_takes_any_mesh_form(pair, tmp_path):
+    pytest.importorskip("matplotlib")
+    from meshcorr.viz.figures import correspondence_figure
+
+    shape, copy, truth = pair
+    info = correspondence_figure(shape, meshcorr.as_mesh(copy), truth, tmp_path / "f.png", truth=truth)
+    assert info["mean_error"] == 0.0 and (tmp_path / "f.png").stat().st_size > 1000

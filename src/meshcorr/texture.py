@@ -89,7 +89,7 @@ def read_textured_obj(path: str | os.PathLike) -> TexturedMesh:
     image = getattr(getattr(visual, "material", None), "image", None)
     if uv is None or len(uv) != len(loaded.vertices):
         raise MeshError(f"{path} has no texture coordinates (no 'vt' lines). Give an OBJ with a UV atlas.")
-    if image is None:
+    if image is None or getattr(image, "format", None) is None:  # trimesh fills in a blank image
         raise MeshError(f"{path} names no texture image (map_Kd in its .mtl), or the image is missing; "
                         "keep the .mtl and the image next to the .obj.")
     V, F = np.asarray(loaded.vertices, dtype=np.float64), np.asarray(loaded.faces, dtype=np.int64)

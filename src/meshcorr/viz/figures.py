@@ -51,6 +51,14 @@ def correspondence_errors(target, mapping: np.ndarray, truth: np.ndarray, *,
     return errors
 
 
+def _vertices_faces(mesh, name: str) -> tuple[np.ndarray, np.ndarray]:
+    """``(V, F)`` of a ``(vertices, faces)`` pair as given, or of anything :func:`meshcorr.as_mesh` reads."""
+    if isinstance(mesh, (tuple, list)) and len(mesh) == 2:
+        return np.asarray(mesh[0]), np.asarray(mesh[1])
+    converted = as_mesh(mesh, name=name)
+    return np.asarray(converted.vertices), np.asarray(converted.faces)
+
+
 def correspondence_figure(source, target, mapping, path, *, truth=None, error: bool = False,
                           coloring: str = "parts", geodesic: str = "heat", elev: float = 30.0,
                           azim: float = -60.0, up: str = "z", dpi: int = 100,
@@ -66,8 +74,8 @@ def correspondence_figure(source, target, mapping, path, *, truth=None, error: b
 
     Parameters
     ----------
-    source, target : ((n1, 3) float, (m1, 3) int), ((n2, 3) float, (m2, 3) int)
-        Vertices and faces of the two meshes.
+    source, target : ((n1, 3) float, (m1, 3) int), path, trimesh.Trimesh or Mesh
+        The two meshes, in any form :func:`meshcorr.match` takes.
     mapping : (n1,) int
         Target vertex of each source vertex, -1 where unmapped.
     path : str or path-like
@@ -96,7 +104,8 @@ def correspondence_figure(source, target, mapping, path, *, truth=None, error: b
     ParameterError
         If a map does not fit the meshes, or ``error`` is set without ``truth``.
     """
-    (V1, F1), (V2, F2) = source, target
+    (V1, F1), (V2, F2) = _vertices_faces(source, "source"), _vertices_faces(target, "target")
+    target = (V2, F2)
     mapping = check_map(mapping, len(V1), len(V2), name=map_name)
     if truth is not None:
         truth = check_map(truth, len(V1), len(V2), name="the ground truth")

@@ -228,3 +228,11 @@ def test_settings_replace_validates_again():
     assert Settings(k=5).replace(refine=False).changed() == {"k": 5, "refine": False}
     with pytest.raises(ParameterError, match="'icp' does not use the option 'k'"):
         Settings(k=5).replace(method="icp")
+
+
+def test_precise_transfer_of_colours_keeps_their_type(result, copy_and_truth):
+    _, truth = copy_and_truth
+    colours = np.random.default_rng(0).integers(0, 256, size=(len(truth), 3)).astype(np.uint8)
+    carried = result.transfer(colours, precise=True)
+    assert carried.dtype == np.uint8
+    np.testing.assert_array_equal(carried, colours[truth])  # exact map: weights one-hot

@@ -38,10 +38,11 @@ class Matcher:
     Examples
     --------
     >>> from meshcorr import Matcher, datasets
-    >>> a, b = datasets.figure(), datasets.figure(pose="bent")
-    >>> result = Matcher(k=6, refine=False).fit(a, b)   # doctest: +SKIP
-    >>> result.map.shape                                 # doctest: +SKIP
-    (..., )
+    >>> source, target = datasets.figure(), datasets.figure(pose="bent")
+    >>> matcher = Matcher(k=6, refine=False)
+    >>> result = matcher.fit(source, target)  # doctest: +SKIP
+    >>> result.map.shape == (source.n_vertices,)  # doctest: +SKIP
+    True
     """
 
     def __init__(self, settings: Settings | None = None, **options) -> None:

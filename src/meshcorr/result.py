@@ -273,9 +273,10 @@ class Correspondence:
             E.g. labels, a scalar field, RGB colours, UV coordinates.
         precise : bool
             Interpolate barycentrically at the precise map's points
-            (:meth:`precise_map`) instead of copying each matched vertex's value.
+            (:meth:`precise_map`) instead of copying each matched vertex's
+            value; integer values (e.g. RGB colours) are rounded back to their type.
         fill : scalar
-            Value of unmapped source vertices (vertex map only).
+            Value of unmapped source vertices (0 for integer values carried precisely).
 
         Returns
         -------
@@ -288,7 +289,10 @@ class Correspondence:
         if n_target is not None and len(values) != n_target:
             raise ParameterError(f"transfer needs one value per target vertex ({n_target}); got {len(values)}.")
         if precise:
-            return self.precise_map().interpolate(values)
+            pulled = self.precise_map().interpolate(values)
+            if values.dtype.kind in "iub":  # labels, colours: the nearest representable value
+                pulled = np.round(np.nan_to_num(pulled, nan=fill if np.isfinite(fill) else 0)).astype(values.dtype)
+            return pulled
         check_map(self.map, len(self.map), len(values), name="the map")
         return pull_back(values, self.map, fill=fill)
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import inspect
 from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
 
@@ -97,7 +98,7 @@ class Settings:
     symmetry: str = "auto"
     refine: bool = True
     refine_k: int = _REFINE_K
-    landmarks: object = None
+    landmarks: Sequence[tuple[int, int]] | np.ndarray | None = None
     # the output and the input
     bijective: bool = False
     largest_component: bool = False

@@ -154,6 +154,9 @@ def test_methods_needing_meshes_say_how_to_get_them():
     for call in (bare.inverse, bare.show, bare.precise_map, lambda: bare.evaluate(np.arange(4))):
         with pytest.raises(ParameterError, match="needs the meshes"):
             call()
+    square = meshcorr.as_mesh(([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0.0]], [[0, 1, 2], [0, 2, 3]]))
+    bare.attach_meshes(square, square)
+    np.testing.assert_array_equal(bare.inverse().map, np.arange(4))
 
 
 def test_baseline_results_keep_their_meshes_too(shape, copy_and_truth):

@@ -101,7 +101,6 @@ class Matcher:
         finally:
             if hasattr(reporter, "close"):
                 reporter.close()
-        result.attach_meshes(*meshes)
         self.settings_, self.result_ = settings, result
         return result
 

@@ -54,7 +54,8 @@ class Correspondence:
         Final matching cost of each pair (NaN where unmapped): the
         proximity-aided matching's embedding-plus-anchor distance, or a
         baseline's final distance. None when the last stage has no per-pair
-        cost: the ZoomOut refinement (on by default), a baseline without one.
+        cost: the ZoomOut refinement (on by default), a map of the whole-map
+        choice other than the spectral one, a baseline without one.
     method : str
         The method that produced the map ("spectral" or a baseline's name).
         Attributes below that a method does not produce are None or empty.
@@ -106,6 +107,13 @@ class Correspondence:
         scores mean something (see :mod:`meshcorr.orientation`).
     refine_history : list of dict
         Per ZoomOut iteration (:mod:`meshcorr.refine`): basis size, fraction changed.
+    map_candidates : list of dict
+        The complete maps judged by the whole-map choice
+        (:mod:`meshcorr.selection`): origin ("spectral", "extremities-r",
+        "landmarks"), orientation, distortion, regional orientation, landmark
+        error, and ``chosen`` / ``alternative`` flags. Empty when that stage
+        did not run (``symmetry="cost"`` or ``"mirror"``, ``extremities=False``
+        without landmarks).
     source, target : Mesh or None
         The meshes as matched (after ``largest_component``), kept without
         their cached geodesic matrices; None if not recorded.
@@ -134,6 +142,7 @@ class Correspondence:
     alternative_map: np.ndarray | None = None
     orientation_reliable: bool | None = None
     refine_history: list = field(default_factory=list)
+    map_candidates: list[dict] = field(default_factory=list)
     source: Mesh | None = field(default=None, repr=False, compare=False)
     target: Mesh | None = field(default=None, repr=False, compare=False)
     version: str = __version__
@@ -162,6 +171,7 @@ class Correspondence:
             "n_mapped": int(mapped.sum()),
             "n_target_hit": int(len(np.unique(self.map[mapped]))),
             "configuration": self.configuration.to_dict() if self.configuration else None,
+            "map_candidates": self.map_candidates,
             "runner_up": self.runner_up.to_dict() if self.runner_up else None,
             "n_configurations": len(self.alternatives),
             "eigenvalues": {k: [float(x) for x in v] for k, v in self.eigenvalues.items()},

@@ -64,8 +64,12 @@ class Settings:
     refine_k : int
         Laplace-Beltrami basis size of the refinement.
     landmarks : (p, 2) int or None
-        Known vertex pairs ``(source vertex, target vertex)`` the map must
-        respect (passed to :func:`meshcorr.match` where it supports them).
+        Known vertex pairs ``(source vertex, target vertex)``, input
+        numbering: they start a candidate map, decide among the candidates
+        and are mapped exactly.
+    extremities : bool
+        Also try maps started from matched shape extremities and keep the
+        one the whole-map energies prefer (with ``symmetry="auto"``).
     bijective : bool
         One-to-one map (equal vertex counts only).
     largest_component : bool
@@ -99,6 +103,7 @@ class Settings:
     refine: bool = True
     refine_k: int = _REFINE_K
     landmarks: Sequence[tuple[int, int]] | np.ndarray | None = None
+    extremities: bool = True
     # the output and the input
     bijective: bool = False
     largest_component: bool = False

@@ -2,7 +2,7 @@
 
 In the style of scikit-learn's estimators: ``__init__`` only stores the
 settings, :meth:`Matcher.fit` validates them (:class:`meshcorr.Settings`),
-prepares both meshes, runs :func:`meshcorr.match` and keeps the result in
+runs :func:`meshcorr.match` and keeps the result in
 ``result_``; :meth:`get_params` / :meth:`set_params` make the settings
 inspectable. :func:`meshcorr.match` stays the one-call shortcut of the same
 work.
@@ -10,7 +10,7 @@ work.
 
 from __future__ import annotations
 
-from .mesh import Mesh, MeshLike, as_mesh
+from .mesh import MeshLike
 from .progress import as_progress
 from .result import Correspondence
 from .settings import Settings, match_keywords
@@ -92,12 +92,9 @@ class Matcher:
 
         settings = self._settings()
         keywords = match_keywords(settings)
-        largest = settings.largest_component
-        meshes = [as_mesh(mesh, name=name, largest_component=largest) if not isinstance(mesh, Mesh) else mesh
-                  for mesh, name in ((source, "source"), (target, "target"))]
         reporter = as_progress(progress)
         try:
-            result = match(meshes[0], meshes[1], progress=reporter, **keywords)
+            result = match(source, target, progress=reporter, **keywords)
         finally:
             if hasattr(reporter, "close"):
                 reporter.close()

@@ -21,12 +21,19 @@ import numpy as np
 
 from .errors import ParameterError
 from .methods import METHOD_NAMES, reject_inapplicable
-from .modes import N_LANDMARKS, SCALABLE_ABOVE
+from .pipeline import match as _match
 
 __all__ = ["Settings", "match_keywords"]
 
-#: Laplace-Beltrami basis size of the ZoomOut refinement (:data:`meshcorr.pipeline.REFINE_K`).
-_REFINE_K = 40
+_MATCH_PARAMETERS = inspect.signature(_match).parameters
+
+
+def _match_default(*names: str):
+    """The default of the first of ``names`` that :func:`meshcorr.match` has (one source of truth)."""
+    for name in names:
+        if name in _MATCH_PARAMETERS:
+            return _MATCH_PARAMETERS[name].default
+    raise ImportError(f"meshcorr.match has none of the parameters {names}")  # pragma: no cover
 
 
 @dataclass(frozen=True)
@@ -101,7 +108,7 @@ class Settings:
     anchor_scale: str = "embedding"
     symmetry: str = "auto"
     refine: bool = True
-    refine_k: int = _REFINE_K
+    refine_k: int = _match_default("refine_k")
     landmarks: Sequence[tuple[int, int]] | np.ndarray | None = None
     extremities: bool = True
     # the output and the input
@@ -110,9 +117,9 @@ class Settings:
     prealign: bool = True
     # resources
     mode: str = "auto"
-    n_samples: int = N_LANDMARKS
+    n_samples: int = _match_default("n_samples", "n_landmarks")
     max_memory: int | str | None = None
-    scalable_above: int = SCALABLE_ABOVE
+    scalable_above: int = _match_default("scalable_above")
 
     def __post_init__(self) -> None:
         if self.method not in METHOD_NAMES:
@@ -174,9 +181,7 @@ def match_keywords(settings: Settings) -> dict:
     refuses ``landmarks`` when this version of :func:`meshcorr.match` does
     not take them.
     """
-    from .pipeline import match
-
-    accepted = inspect.signature(match).parameters
+    accepted = _MATCH_PARAMETERS
     keywords = settings.changed()
     if "n_samples" in keywords and "n_samples" not in accepted:
         keywords["n_landmarks"] = keywords.pop("n_samples")

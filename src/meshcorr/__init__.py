@@ -7,9 +7,10 @@ method (Jain & Zhang, SMI 2006).
 from .errors import MeshError, MeshWarning, MeshcorrError, ParameterError
 from .mesh import Mesh, as_mesh
 from .pipeline import match
+from .prepared import PreparedShape, prepare
 from .result import Correspondence
 
 __version__ = "0.1.0"
 
-__all__ = ["match", "Correspondence", "Mesh", "as_mesh", "MeshError", "MeshWarning",
+__all__ = ["match", "prepare", "PreparedShape", "Correspondence", "Mesh", "as_mesh", "MeshError", "MeshWarning",
            "MeshcorrError", "ParameterError", "__version__"]

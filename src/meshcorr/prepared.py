@@ -151,6 +151,11 @@ class PreparedShape:
 
     def save(self, path) -> None:
         """Write it to ``path`` (``.npz``, the format in the module docstring), atomically."""
+        payload = self.to_bytes()
+        atomic_write(path, lambda file: file.write(payload))
+
+    def to_bytes(self) -> bytes:
+        """The file :meth:`save` writes, as bytes."""
         arrays: dict[str, np.ndarray] = {"vertices": self.mesh.vertices, "faces": self.mesh.faces,
                                          "kept": self.mesh.kept,
                                          "spectrum.eigenvalues": self.spectrum.eigenvalues,
@@ -169,8 +174,16 @@ class PreparedShape:
         arrays["header"] = np.frombuffer(json.dumps(header).encode(), dtype=np.uint8)
         buffer = io.BytesIO()
         np.savez(buffer, **arrays)
-        payload = buffer.getvalue()
-        atomic_write(path, lambda file: file.write(payload))
+        return buffer.getvalue()
+
+    @classmethod
+    def from_bytes(cls, payload: bytes) -> PreparedShape:
+        """The inverse of :meth:`to_bytes` (checks the format and version as :meth:`load` does)."""
+        return cls._from_arrays(*_read(io.BytesIO(payload), name="the prepared shape"))
+
+    def __reduce__(self):
+        # Pickled (e.g. sent between Dask workers) as its file: the geodesic solver is rebuilt on demand.
+        return (PreparedShape.from_bytes, (self.to_bytes(),))
 
     @classmethod
     def load(cls, path, *, mesh: MeshLike | None = None, settings: dict | None = None) -> PreparedShape:
@@ -357,21 +370,22 @@ def _read_only(array: np.ndarray) -> np.ndarray:
     return array
 
 
-def _read(path) -> tuple[dict, dict]:
+def _read(path, *, name: str | None = None) -> tuple[dict, dict]:
     """Header and arrays of a prepared-shape file; refuses unreadable files and other versions."""
+    name = name or str(path)
     try:
         with np.load(path, allow_pickle=False) as data:
             arrays = {name: data[name] for name in data.files}
         header = json.loads(arrays.pop("header").tobytes().decode())
         version = header["format"]
     except FileNotFoundError:
-        raise PreparedShapeError(f"{path} does not exist.") from None
+        raise PreparedShapeError(f"{name} does not exist.") from None
     except (OSError, ValueError, KeyError, TypeError, UnicodeDecodeError) as exc:
-        raise PreparedShapeError(f"{path} is not a prepared shape written by meshcorr ({exc}); prepare the "
+        raise PreparedShapeError(f"{name} is not a prepared shape written by meshcorr ({exc}); prepare the "
                                  "mesh again (meshcorr.prepare) or clear the cache (meshcorr cache clear).") from None
     if version != FORMAT_VERSION or header.get("meshcorr") != _version():
         raise PreparedShapeError(
-            f"{path} was written by meshcorr {header.get('meshcorr')} (format {version}); this is meshcorr "
+            f"{name} was written by meshcorr {header.get('meshcorr')} (format {version}); this is meshcorr "
             f"{_version()} (format {FORMAT_VERSION}), whose results may differ. Prepare the mesh again or "
             "clear the cache (meshcorr cache clear).")
     return header, arrays

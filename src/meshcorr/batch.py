@@ -57,6 +57,8 @@ FIELDS = ["source", "target", "map", "status", "seconds", "mean_error", "error"]
 #: ``status`` of a pair whose map was written.
 DONE = "ok"
 FAILED = "failed"
+#: Seconds :func:`connect` waits for a scheduler to answer.
+CONNECT_TIMEOUT = 30
 DASK_MISSING = ("meshcorr batch runs on Dask, which is not installed: pip install \"meshcorr[dask]\" "
                 "(or pip install \"dask[distributed]\").")
 
@@ -233,8 +235,6 @@ def _split_options(options: dict) -> tuple[dict, dict]:
     if "method" in given and given["method"] != "spectral":
         raise ParameterError("meshcorr batch runs the spectral method only (prepared shapes); "
                              f"got method={given['method']!r}.")
-    if "progress" in given:
-        raise ParameterError("The per-pair 'progress' option does not apply to a batch; use progress=.")
     shape = {key: given.pop(key, default) for key, default in SHAPE_SETTINGS.items()}
     settings = shape_settings(**shape)
     # Every other option is checked before any work: match validates all its options before it
@@ -377,11 +377,11 @@ def connect(address: str):
     Raises
     ------
     MeshcorrError
-        Dask is missing, or no scheduler answers at ``address`` within 30 s.
+        Dask is missing, or no scheduler answers at ``address`` within :data:`CONNECT_TIMEOUT` seconds.
     """
     distributed = _import_distributed()
     try:
-        return distributed.Client(address, timeout=30)
+        return distributed.Client(address, timeout=CONNECT_TIMEOUT)
     except (OSError, TimeoutError, ValueError) as exc:
         raise MeshcorrError(f"No Dask scheduler answered at {address} ({_one_line(exc)}): start one with "
                             "'dask scheduler' and workers with 'dask worker ADDRESS', or omit --scheduler "

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import builtins
+import threading
 import json
 from pathlib import Path
 
@@ -180,3 +181,10 @@ def test_without_dask_the_batch_names_the_extra(shapes, tmp_path, monkeypatch, c
         batch(all_pairs(paths[:2]), tmp_path)
     assert main(["batch", "--all-pairs", *paths[:2], "--out", str(tmp_path)]) == 1
     assert 'meshcorr[dask]' in capsys.readouterr().err
+
+
+def test_meshcorr_threads_1_runs_the_thread_pools_in_the_calling_thread(monkeypatch):
+    from meshcorr._threads import parallel_map
+
+    monkeypatch.setenv("MESHCORR_THREADS", "1")  # what each worker process of the local cluster gets
+    assert parallel_map(lambda _: threading.get_ident(), [0, 1, 2]) == [threading.get_ident()] * 3

@@ -219,8 +219,10 @@ def _client(distributed, client, n_workers: int | None):
         yield client
         return
     workers = n_workers or os.cpu_count() or 1
-    # Workers inherit the environment: one BLAS thread each (a worker process per core).
-    env = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")}
+    # One process per core, so one thread each: for BLAS, and for the pipeline's own thread pools
+    # (meshcorr._threads; the maps are those of the threaded runs).
+    env = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+                                  "MESHCORR_THREADS")}
     with distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                   host="127.0.0.1", dashboard_address=None, env=env) as cluster, \
             distributed.Client(cluster) as local:

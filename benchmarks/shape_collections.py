@@ -99,7 +99,7 @@ def main() -> int:
         return 0
 
     import meshcorr
-    from meshcorr.batch import all_pairs, map_name
+    from meshcorr.collection import all_pairs, map_name
     from meshcorr.consistency import choose_hub, cycle_errors, sample_triples, through_hub
     from meshcorr.io import read_map
 
@@ -115,9 +115,11 @@ def main() -> int:
     for workers in (2, 1):
         wall = _batch_cli(paths, args.out / f"batch{workers}", workers)
         summary = json.loads((args.out / f"batch{workers}" / "summary.json").read_text())
+        cpu = [r["cpu_seconds"] for r in summary["pairs"] if r["cpu_seconds"] is not None]
         report[f"batch_{workers}_workers"] = {"wall_s": wall, "per_map_s": wall / len(pairs),
                                               "mean_pair_s": summary["mean_seconds"],
-                                              "failed": summary["n_failed"]}
+                                              "mean_pair_cpu_s": float(np.mean(cpu)),
+                                              "failed": summary["n_failed"], "load_average": os.getloadavg()[0]}
         print(f"batch, {workers} workers: {wall:.1f} s, {wall / len(pairs):.3f} s per map", file=sys.stderr)
     batch_dir = args.out / "batch2" / "maps"
     same_12 = all(np.array_equal(read_map(batch_dir / map_name(a, b)),

@@ -13,7 +13,7 @@ import trimesh
 
 import meshcorr
 from meshcorr import datasets as ds
-from meshcorr.batch import all_pairs, batch, map_name, read_pairs, template_pairs
+from meshcorr.collection import all_pairs, batch, map_name, read_pairs, template_pairs
 from meshcorr.cli import main
 from meshcorr.consistency import choose_hub, cycle_errors, sample_triples, through_hub
 from meshcorr.errors import MeshcorrError, ParameterError
@@ -49,6 +49,7 @@ def shapes(tmp_path_factory):
 def test_all_pairs_batch_gives_the_per_pair_maps(cluster, shapes, tmp_path):
     paths, _ = shapes
     seen = []
+    assert meshcorr.batch is batch
     records = batch(all_pairs(paths), tmp_path, client=cluster, ground_truth="identity",
                     progress=lambda *a: seen.append(a))
     assert len(records) == 12 and all(r["status"] == "ok" for r in records)
@@ -60,7 +61,7 @@ def test_all_pairs_batch_gives_the_per_pair_maps(cluster, shapes, tmp_path):
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["n_pairs"] == 12 and summary["n_failed"] == 0
     assert (tmp_path / "summary.csv").read_text().splitlines()[0] == \
-        "source,target,map,status,seconds,mean_error,error"
+        "source,target,map,status,seconds,cpu_seconds,mean_error,error"
     # Consistency over the collection: the cycle error of the direct maps and of the hub's.
     names = [Path(p).stem for p in paths]
     maps = {(Path(r["source"]).stem, Path(r["target"]).stem): read_map(r["map"]) for r in records}
@@ -155,7 +156,7 @@ def test_batch_checks_its_input_before_any_work(shapes, tmp_path):
 
 def test_cli_usage_errors(shapes, tmp_path, capsys, monkeypatch):
     paths, _ = shapes
-    monkeypatch.setattr("meshcorr.batch.CONNECT_TIMEOUT", 1)
+    monkeypatch.setattr("meshcorr.collection.CONNECT_TIMEOUT", 1)
     assert main(["batch", "--all-pairs", *paths[:2], "--out", str(tmp_path), "--set", "nokey"]) == 2
     assert "--set takes KEY=VALUE" in capsys.readouterr().err
     assert main(["batch", "--pairs", "p.txt", paths[0], "--out", str(tmp_path)]) == 2

@@ -45,7 +45,7 @@ def single_blas_thread():
 
 def _cores() -> int:
     """Cores this process may use: ``$MESHCORR_THREADS`` if set (e.g. 1 in each worker process of
-    :mod:`meshcorr.batch`, which runs one process per core), else the CPU affinity."""
+    :mod:`meshcorr.collection`, which runs one process per core), else the CPU affinity."""
     if os.environ.get("MESHCORR_THREADS", "").strip().isdigit():
         return max(1, int(os.environ["MESHCORR_THREADS"]))
     try:

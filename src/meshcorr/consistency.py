@@ -126,7 +126,7 @@ def consistency_report(out_dir, shapes: Sequence[str], records: Sequence[dict], 
     Parameters
     ----------
     out_dir : path
-        The folder of :func:`meshcorr.batch.batch`.
+        The folder of :func:`meshcorr.collection.batch`.
     shapes : sequence of str
         The mesh files of ``--all-pairs``.
     records : sequence of dict

@@ -70,7 +70,7 @@ def add_parser(sub) -> None:
 
 
 def _pairs(args) -> list[tuple[str, str]]:
-    from ..batch import all_pairs, read_pairs, template_pairs
+    from ..collection import all_pairs, read_pairs, template_pairs
     from ..errors import ParameterError
 
     if args.shapes and not args.template:
@@ -125,14 +125,14 @@ def _duration(seconds: float) -> str:
 
 
 def run(args) -> int:
-    from ..batch import batch
+    from ..collection import batch
 
     pairs = _pairs(args)
     options = dict(_options(args.set), k=args.k, geodesic=args.geodesic, random_state=args.seed,
                    refine=args.refine, mode=args.mode, n_samples=args.samples)
     client = None
     if args.scheduler:
-        from ..batch import connect
+        from ..collection import connect
 
         client = connect(args.scheduler)
     try:

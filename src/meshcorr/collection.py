@@ -1,4 +1,4 @@
-"""Many pairs at once: each shape prepared once, one task per pair, on Dask.
+"""Many pairs at once (:func:`meshcorr.batch`): each shape prepared once, one task per pair, on Dask.
 
 :func:`batch` maps a list of (source, target) mesh files. It builds a Dask
 graph with one task per shape preparation (:func:`meshcorr.prepare`) and one
@@ -53,7 +53,7 @@ from .prepared import SHAPE_SETTINGS, PreparedShape, shape_settings
 BatchProgress = Callable[[int, int, int, "float | None"], None]
 
 #: Columns of ``summary.csv``.
-FIELDS = ["source", "target", "map", "status", "seconds", "mean_error", "error"]
+FIELDS = ["source", "target", "map", "status", "seconds", "cpu_seconds", "mean_error", "error"]
 #: ``status`` of a pair whose map was written.
 DONE = "ok"
 FAILED = "failed"
@@ -148,7 +148,8 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
     records : list of dict
         One per pair, in the order of ``pairs``: ``source``, ``target``,
         ``map`` (path), ``status`` ("ok" or "failed"), ``seconds`` (the
-        pair's matching time), ``mean_error`` (with ``ground_truth``),
+        pair's matching time), ``cpu_seconds`` (the CPU time of the worker
+        process meanwhile), ``mean_error`` (with ``ground_truth``),
         ``error`` (the failure's message).
 
     Raises
@@ -297,7 +298,7 @@ def _pair_task(source, target, source_path: str, target_path: str, map_path: str
     from .pipeline import match
 
     record = {"source": source_path, "target": target_path, "map": map_path, "status": FAILED,
-              "seconds": None, "mean_error": None, "error": ""}
+              "seconds": None, "cpu_seconds": None, "mean_error": None, "error": ""}
     for shape, path in ((source, source_path), (target, target_path)):
         if not isinstance(shape, PreparedShape):  # the message of the failed preparation
             name = Path(path).name
@@ -306,9 +307,10 @@ def _pair_task(source, target, source_path: str, target_path: str, map_path: str
     try:
         with single_blas_thread():
             source, target = _in_pair_mode(source, target, settings, options)
-            start = time.perf_counter()
+            start, cpu = time.perf_counter(), time.process_time()
             result = match(source, target, **options, **settings)
             record["seconds"] = time.perf_counter() - start
+            record["cpu_seconds"] = time.process_time() - cpu  # the worker's CPU time: load-independent
             write_map(map_path, result.map)
             if ground_truth is not None:
                 record["mean_error"] = _mean_error(source, target, result.map, source_path, target_path,

@@ -189,3 +189,51 @@ def test_meshcorr_threads_1_runs_the_thread_pools_in_the_calling_thread(monkeypa
 
     monkeypatch.setenv("MESHCORR_THREADS", "1")  # what each worker process of the local cluster gets
     assert parallel_map(lambda _: threading.get_ident(), [0, 1, 2]) == [threading.get_ident()] * 3
+
+
+def test_consistency_error_paths(shapes, tmp_path):
+    paths, _ = shapes
+    mesh = meshcorr.as_mesh(paths[0])
+    meshes = {"a": mesh, "b": mesh, "c": mesh}
+    one_way = {("a", "b"): np.arange(500), ("b", "c"): np.arange(500), ("a", "c"): np.arange(500)}
+    with pytest.raises(ParameterError, match="No shape has maps to and from every other shape"):
+        choose_hub(one_way, meshes)
+    with pytest.raises(ParameterError, match="'n_points' parameter must be an int >= 1"):
+        cycle_errors(one_way, meshes, [("a", "b", "c")], n_points=0)
+    from meshcorr.consistency import consistency_report
+
+    records = [{"source": paths[0], "target": paths[1], "status": "failed", "map": ""}]
+    with pytest.raises(ParameterError, match="needs three shapes whose maps all succeeded"):
+        consistency_report(tmp_path, paths[:3], records)
+
+
+def test_a_damaged_summary_and_a_partial_target_are_reported(shapes, tmp_path):
+    from meshcorr.collection import _mean_error
+    from meshcorr.prepared import prepare
+
+    paths, _ = shapes
+    (tmp_path / "summary.json").write_text("{")
+    with pytest.raises(ParameterError, match="is not a batch summary"):
+        batch(all_pairs(paths[:2]), tmp_path)
+    shape = ds.creature(resolution=1)
+    two = (np.concatenate([shape.vertices, shape.vertices + 10]),
+           np.concatenate([shape.faces, shape.faces + shape.n_vertices]))
+    partial = prepare(two, largest_component=True)
+    with pytest.raises(ParameterError, match="needs the whole target mesh"):
+        _mean_error(partial, partial, np.arange(partial.n_vertices), "a.off", "b.off", "identity", "heat")
+
+
+def test_cli_batch_cache_and_ctrl_c(cluster, shapes, tmp_path, monkeypatch, capsys):
+    paths, _ = shapes
+    address = cluster.scheduler.address
+    cache = tmp_path / "cache"
+    assert main(["batch", "--template", paths[0], paths[1], "--out", str(tmp_path / "o"), "--scheduler", address,
+                 "--cache", str(cache), "-q"]) == 0
+    assert len(list(cache.glob("*.npz"))) == 2  # both shapes prepared into the cache by the workers
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("meshcorr.collection.batch", interrupted)
+    assert main(["batch", "--template", paths[0], paths[1], "--out", str(tmp_path / "o2"), "-q"]) == 130
+    assert "interrupted" in capsys.readouterr().err

@@ -139,3 +139,12 @@ def test_n_landmarks_was_renamed_n_samples(pair, tmp_path, capsys):
     assert "--landmarks N was renamed --samples N" in capsys.readouterr().err
     code = main(["match", str(path), str(path), "-o", str(tmp_path / "m.txt"), "--landmarks", "pairs.txt"])
     assert code == 2 and "use --samples N" in capsys.readouterr().err
+
+
+def test_prepared_shapes_with_user_landmarks_give_the_same_map(pair):
+    landmarks = [(0, 0), (250, 250)]
+    shapes = [prepare(mesh) for mesh in pair]
+    np.testing.assert_array_equal(meshcorr.match(*shapes, landmarks=landmarks).map,
+                                  meshcorr.match(*pair, landmarks=landmarks).map)
+    np.testing.assert_array_equal(meshcorr.match(*shapes, extremities=False).map,
+                                  meshcorr.match(*pair, extremities=False).map)

@@ -296,7 +296,7 @@ def load_mesh(shape: MeshLike, settings: dict, *, name: str | None) -> Mesh:
 def prepare_mesh(mesh: Mesh, settings: dict, mode: str, timer: StageTimer | None = None) -> PreparedShape:
     """:func:`prepare` of a validated mesh in a resolved ``mode`` ("dense" or "scalable")."""
     shape = PreparedShape(mesh, shape_spectrum(mesh, settings, mode, timer or StageTimer()), settings)
-    warm(mesh, settings)
+    warm(mesh, shape.spectrum, settings)
     return shape
 
 
@@ -307,14 +307,17 @@ def shape_spectrum(mesh: Mesh, settings: dict, mode: str, timer: StageTimer) -> 
                           random_state=settings["random_state"], timer=timer)
 
 
-def warm(mesh: Mesh, settings: dict) -> None:
-    """Fill the mesh's cache with the per-shape data of steps 4-7 and the refinement.
+def warm(mesh: Mesh, spectrum: Spectrum, settings: dict) -> None:
+    """Fill the mesh's cache (and the spectrum's geodesic rows) with the per-shape data of a pair.
 
     The orientation and curvature scores of a map onto the mesh itself fill
     exactly the cache entries that scoring a pair's candidates reads, in
-    both roles (source and target), with the pipeline's own parameters.
+    both roles (source and target), with the pipeline's own parameters; the
+    extremities (:mod:`meshcorr.extremities`) leave the geodesic rows they
+    need in ``spectrum.rows``. A new per-shape quantity is one more line here.
     """
     from .curvature import curvature_disagreement
+    from .extremities import find_extremities
     from .orientation import orientation_score
     from .refine import laplace_basis
 
@@ -322,6 +325,7 @@ def warm(mesh: Mesh, settings: dict) -> None:
     identity = np.arange(mesh.n_vertices)
     orientation_score(mesh, mesh, identity, random_state=seed)
     curvature_disagreement(mesh, mesh, identity, random_state=seed)
+    find_extremities(mesh, spectrum.geodesics_from, length_unit=spectrum.max_geodesic, random_state=seed)
     if settings["refine"]:
         laplace_basis(mesh, min(settings["refine_k"], mesh.n_vertices - 1), random_state=seed)
 

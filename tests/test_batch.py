@@ -130,7 +130,8 @@ def test_batch_checks_its_input_before_any_work(shapes, tmp_path):
     for options, message in [({"k": 1}, "'k' parameter must be an int >= 2"),
                              ({"symmetry": "x"}, "'symmetry' parameter must be one of"),
                              ({"method": "icp"}, "spectral method only"),
-                             ({"colour": 1}, "Unknown option of meshcorr.batch")]:
+                             ({"colour": 1}, "Unknown option of meshcorr.batch"),
+                             ({"landmarks": [(0, 0)]}, "User landmarks belong to one pair")]:
         with pytest.raises(ParameterError, match=message):
             batch(all_pairs(paths[:2]), tmp_path, **options)
     with pytest.raises(ParameterError, match="has no pairs"):
@@ -237,3 +238,30 @@ def test_cli_batch_cache_and_ctrl_c(cluster, shapes, tmp_path, monkeypatch, caps
     monkeypatch.setattr("meshcorr.collection.batch", interrupted)
     assert main(["batch", "--template", paths[0], paths[1], "--out", str(tmp_path / "o2"), "-q"]) == 130
     assert "interrupted" in capsys.readouterr().err
+
+
+class _CrashingClient:
+    """A stand-in client whose pair tasks fail in the scheduler (as when a pair kills its worker)."""
+
+    class Future:
+        def __init__(self, key):
+            self.key = key
+
+        def result(self):
+            raise RuntimeError(f"KilledWorker: attempted to run task {self.key} on 3 different workers")
+
+        def release(self):
+            pass
+
+    def submit(self, function, *args, key):
+        return self.Future(key)
+
+
+def test_a_pair_that_crashes_its_worker_is_recorded(shapes, tmp_path, monkeypatch):
+    paths, _ = shapes
+    monkeypatch.setattr(distributed, "as_completed", lambda futures: iter(futures))
+    records = batch(all_pairs(paths[:2]), tmp_path, client=_CrashingClient())
+    assert [r["status"] for r in records] == ["failed", "failed"]
+    assert "KilledWorker" in records[0]["error"] and records[0]["map"].endswith("c0__c1.txt")
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["n_failed"] == 2

@@ -8,7 +8,8 @@ worker once, when Dask first needs it there, not once per pair (it pickles
 as its ``.npz`` file, :meth:`~meshcorr.prepared.PreparedShape.to_bytes`).
 The workers write each map themselves (atomically) and return a small
 record; the caller streams finished pairs (``as_completed``) into
-``summary.json`` and ``summary.csv``, rewritten atomically after each one.
+``summary.json`` and ``summary.csv``, rewritten atomically every
+:data:`SUMMARY_EVERY` seconds and at the end (also when interrupted).
 
 Task keys are derived from the file (path, size, modification time) and the
 settings, so a rerun into the same folder is idempotent: pairs recorded as
@@ -57,6 +58,8 @@ FIELDS = ["source", "target", "map", "status", "seconds", "cpu_seconds", "mean_e
 #: ``status`` of a pair whose map was written.
 DONE = "ok"
 FAILED = "failed"
+#: Seconds between two rewrites of the summary while pairs finish (and once at the end).
+SUMMARY_EVERY = 1.0
 #: Seconds :func:`connect` waits for a scheduler to answer.
 CONNECT_TIMEOUT = 30
 DASK_MISSING = ("meshcorr batch runs on Dask, which is not installed: pip install \"meshcorr[dask]\" "
@@ -180,28 +183,38 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
     todo = [(a, b) for a, b in pairs
             if not (records.get((a, b), {}).get("status") == DONE and (out / "maps" / map_name(a, b)).is_file())]
 
-    with _client(distributed, client, n_workers) as dask_client:
-        shape_keys = {}
-        for path in sorted({p for pair in todo for p in pair}):
-            shape_keys[path] = dask_client.submit(_prepare_task, path, settings, options, cache_root,
-                                                  key=f"prepare-{_task_key(path, settings, options)}")
-        futures = [dask_client.submit(_pair_task, shape_keys[a], shape_keys[b], a, b,
-                                      str(out / "maps" / map_name(a, b)), settings, options, ground_truth,
-                                      key=f"match-{_task_key(a + chr(0) + b, settings, options, ground_truth)}")
-                   for a, b in todo]
-        start, done, failed = time.perf_counter(), 0, 0
-        if progress is not None:
-            progress(0, len(todo), 0, None)
-        for future in distributed.as_completed(futures):
-            record = future.result()
-            future.release()
-            records[(record["source"], record["target"])] = record
-            done, failed = done + 1, failed + (record["status"] != DONE)
-            _write_summary(out, [records[p] for p in pairs if p in records])
+    try:
+        with _client(distributed, client, n_workers) as dask_client:
+            shape_keys = {}
+            for path in sorted({p for pair in todo for p in pair}):
+                shape_keys[path] = dask_client.submit(_prepare_task, path, settings, options, cache_root,
+                                                      key=f"prepare-{_task_key(path, settings, options)}")
+            futures = {}
+            for a, b in todo:
+                map_path = str(out / "maps" / map_name(a, b))
+                key = f"match-{_task_key(a + chr(0) + b, settings, options, ground_truth, map_path)}"
+                future = dask_client.submit(_pair_task, shape_keys[a], shape_keys[b], a, b, map_path, settings,
+                                            options, ground_truth, key=key)
+                futures[future] = (a, b, map_path)
+            start, done, failed, written = time.perf_counter(), 0, 0, time.perf_counter()
             if progress is not None:
-                elapsed = time.perf_counter() - start
-                progress(done, len(todo), failed, elapsed / done * (len(todo) - done))
-    _write_summary(out, [records[p] for p in pairs if p in records])
+                progress(0, len(todo), 0, None)
+            for future in distributed.as_completed(list(futures)):
+                try:
+                    record = future.result()
+                except Exception as exc:  # noqa: BLE001 - e.g. KilledWorker: the pair crashed its worker
+                    record = dict(_record(*futures[future]), error=_one_line(exc))
+                future.release()
+                records[(record["source"], record["target"])] = record
+                done, failed = done + 1, failed + (record["status"] != DONE)
+                if time.perf_counter() - written > SUMMARY_EVERY:  # a rerun redoes the pairs not yet written
+                    _write_summary(out, [records[p] for p in pairs if p in records])
+                    written = time.perf_counter()
+                if progress is not None:
+                    elapsed = time.perf_counter() - start
+                    progress(done, len(todo), failed, elapsed / done * (len(todo) - done))
+    finally:  # after an interruption too: a rerun skips what is recorded
+        _write_summary(out, [records[p] for p in pairs if p in records])
     return [records[p] for p in pairs]
 
 
@@ -238,6 +251,9 @@ def _split_options(options: dict) -> tuple[dict, dict]:
     if "method" in given and given["method"] != "spectral":
         raise ParameterError("meshcorr batch runs the spectral method only (prepared shapes); "
                              f"got method={given['method']!r}.")
+    if given.get("landmarks") is not None:
+        raise ParameterError("User landmarks belong to one pair: meshcorr batch does not take them (match "
+                             "such pairs one by one with meshcorr.match(..., landmarks=...)).")
     shape = {key: given.pop(key, default) for key, default in SHAPE_SETTINGS.items()}
     settings = shape_settings(**shape)
     # Every other option is checked before any work: match validates all its options before it
@@ -297,8 +313,7 @@ def _pair_task(source, target, source_path: str, target_path: str, map_path: str
     from .io import write_map
     from .pipeline import match
 
-    record = {"source": source_path, "target": target_path, "map": map_path, "status": FAILED,
-              "seconds": None, "cpu_seconds": None, "mean_error": None, "error": ""}
+    record = _record(source_path, target_path, map_path)
     for shape, path in ((source, source_path), (target, target_path)):
         if not isinstance(shape, PreparedShape):  # the message of the failed preparation
             name = Path(path).name
@@ -319,6 +334,12 @@ def _pair_task(source, target, source_path: str, target_path: str, map_path: str
     except Exception as exc:  # noqa: BLE001 - a failed pair is a record, never the end of the batch
         record["error"] = _one_line(exc)
     return record
+
+
+def _record(source_path: str, target_path: str, map_path: str) -> dict:
+    """The record of a pair not (yet) mapped: status "failed", no times, no error message."""
+    return {"source": source_path, "target": target_path, "map": map_path, "status": FAILED, "seconds": None,
+            "cpu_seconds": None, "mean_error": None, "error": ""}
 
 
 def _in_pair_mode(source: PreparedShape, target: PreparedShape, settings: dict, options: dict):

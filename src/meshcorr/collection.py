@@ -34,6 +34,7 @@ import csv
 import hashlib
 import io
 import json
+import logging
 import os
 import time
 from contextlib import contextmanager
@@ -237,8 +238,9 @@ def _client(distributed, client, n_workers: int | None):
     # (meshcorr._threads; the maps are those of the threaded runs).
     env = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
                                   "MESHCORR_THREADS")}
-    with distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                  host="127.0.0.1", dashboard_address=None, env=env) as cluster, \
+    # silence_logs: Dask's own warnings (e.g. the tasks cancelled by Ctrl-C) are not the user's business.
+    with distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None, env=env, silence_logs=logging.ERROR) as cluster, \
             distributed.Client(cluster) as local:
         yield local
 

@@ -16,7 +16,7 @@ truth, but each cycle error is at most the sum of the three maps' errors).
 
 **Maps through a hub** (a star-shaped synchronisation, in the spirit of
 template-based map networks, e.g. Huang, Wang & Guibas, "Functional map
-networks for analyzing and exploring large shape collections", SIGGRAPH
+networks for analyzing and browsing large shape collections", SIGGRAPH
 2014, who synchronise through a latent basis): the hub :math:`H` is the shape
 whose two-step maps agree best with the direct ones (the smallest mean
 Euclidean distance, divided by :math:`\\sqrt{\\mathrm{area}}`, between

@@ -241,3 +241,10 @@ def test_precise_transfer_of_colours_keeps_their_type(result, copy_and_truth):
     carried = result.transfer(colours, precise=True)
     assert carried.dtype == np.uint8
     np.testing.assert_array_equal(carried, colours[truth])  # exact map: weights one-hot
+
+
+def test_matcher_takes_prepared_shapes(shape, copy_and_truth, result):
+    prepared = [meshcorr.prepare(s, refine=False) for s in (shape, copy_and_truth[0])]
+    again = Matcher(refine=False).fit(*prepared)
+    np.testing.assert_array_equal(again.map, result.map)
+    assert again.target is not None and again.evaluate(copy_and_truth[1])["mean_error"] < 1e-9

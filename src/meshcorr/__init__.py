@@ -10,11 +10,22 @@ from ._version import __version__
 from .errors import MeshError, MeshWarning, MeshcorrError, ParameterError
 from .mesh import Mesh, as_mesh
 from .pipeline import match
+from .prepared import PreparedShape, prepare
 from .result import Correspondence
 from .settings import Settings
 from .matcher import Matcher
 from . import datasets, evaluation, fmap, precise, progress, transfer, viz  # noqa: E402 - public submodules
 
-__all__ = ["match", "Matcher", "Settings", "Correspondence", "Mesh", "as_mesh", "MeshError", "MeshWarning",
-           "MeshcorrError", "ParameterError", "datasets", "evaluation", "fmap", "precise", "progress",
-           "transfer", "viz", "__version__"]
+__all__ = ["match", "Matcher", "Settings", "prepare", "PreparedShape", "batch", "Correspondence", "Mesh",
+           "as_mesh", "MeshError", "MeshWarning", "MeshcorrError", "ParameterError", "datasets", "evaluation",
+           "fmap", "precise", "progress", "transfer", "viz", "__version__"]
+
+
+def __getattr__(name: str):
+    # meshcorr.batch (meshcorr.collection.batch) is imported on first use: it pulls in the
+    # benchmark and evaluation modules, and Dask only when it runs.
+    if name == "batch":
+        from .collection import batch
+
+        return batch
+    raise AttributeError(f"module 'meshcorr' has no attribute {name!r}")

@@ -286,8 +286,16 @@ def test_mirror_option_gives_the_other_side(results, pair):
     summary = result.summary()
     assert summary["params"]["symmetry"] == "mirror"
     assert [c["chosen"] for c in summary["candidates"]].count(True) == 1
-    assert all(0.0 <= c["orientation"] <= 1.0 for c in summary["candidates"])
-    assert all(0.0 <= c["curvature"] < 2.0 and c["distortion"] is None for c in summary["candidates"])
+    chosen = next(c for c in summary["candidates"] if c["chosen"])
+    kept = next(c for c in summary["candidates"] if c["alternative"])
+    # The mirror reverses orientation, the kept alternative (the right map) preserves it; the
+    # mirror leaves mean curvature as it is, so both agree with the target's about equally
+    # (measured 0.2915 and 0.2891), better than the front/back flips (0.3552).
+    assert chosen["orientation"] < 0.2 and kept["orientation"] > 0.8
+    assert chosen["curvature"] == pytest.approx(kept["curvature"], rel=0.05)
+    others = [c["curvature"] for c in summary["candidates"] if not (c["chosen"] or c["alternative"])]
+    assert all(max(chosen["curvature"], kept["curvature"]) < other for other in others)
+    assert all(c["distortion"] is None for c in summary["candidates"])
 
 
 @pytest.mark.parametrize("only", [0, 1])

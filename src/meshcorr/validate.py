@@ -4,9 +4,10 @@ Every check raises :class:`~meshcorr.errors.MeshError` with a message that
 names the problem, how many elements are affected (with the first few
 offending indices) and the fix. All checks are vectorized numpy / scipy.
 
-The checks run in this order: shapes (and emptiness), finite coordinates,
-face index range, degenerate faces, non-manifold faces / edges / vertices,
-unreferenced vertices and connected components, minimum vertex count.
+The checks run in this order: shapes (ragged lists, emptiness), real and
+finite coordinates, face index range, degenerate faces, non-manifold faces /
+edges / vertices, unreferenced vertices and connected components, minimum
+vertex count.
 """
 
 from __future__ import annotations
@@ -307,9 +308,10 @@ def validate_mesh(
     Raises
     ------
     MeshError
-        If the mesh is empty, not (n, 3) / (m, 3), has NaN or inf coordinates,
-        out-of-range indices, degenerate or duplicate faces, non-manifold edges
-        or vertices, unreferenced vertices or several components (unless
+        If the mesh is empty, not (n, 3) / (m, 3) (ragged lists included), has
+        coordinates that are not real numbers or are NaN or inf, out-of-range
+        indices, degenerate or duplicate faces, non-manifold edges or vertices,
+        unreferenced vertices or several components (unless
         ``largest_component``), or fewer than ``min_vertices`` vertices.
     ParameterError
         If ``min_vertices`` is not an int >= 1.

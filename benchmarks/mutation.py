@@ -17,6 +17,7 @@ Not part of the test command: it takes minutes to an hour. Usage::
     nice -n 10 python benchmarks/mutation.py hand
     nice -n 10 python benchmarks/mutation.py cosmic --sample 40 --seed 0
     nice -n 10 python benchmarks/mutation.py cosmic --module validate --sample 0  # all
+    python benchmarks/mutation.py report KEEP_FOLDER --diffs  # survivors of a --keep run
 
 Both print a Markdown table (``benchmarks/RESULTS-tests.md`` holds the last ones).
 """
@@ -212,8 +213,18 @@ def _sample(session: Path, size: int, seed: int) -> tuple[int, int]:
     return len(items), len(keep)
 
 
-def _survivors(session: Path) -> list[str]:
-    """``file:line operator`` of each survivor, from the session database."""
+def _counts(session: Path) -> dict[str, int]:
+    """Sampled mutants per test outcome: ``{"killed": ..., "survived": ..., "incompetent": ...}``."""
+    con = sqlite3.connect(session)
+    try:
+        return dict(con.execute("SELECT lower(test_outcome), COUNT(*) FROM work_results "
+                                "WHERE lower(worker_outcome) != 'skipped' GROUP BY lower(test_outcome)"))
+    finally:
+        con.close()
+
+
+def _survivors(session: Path) -> list[tuple[str, str]]:
+    """``("file:line operator #occurrence", diff)`` of each survivor, from the session database."""
     from cosmic_ray.work_db import WorkDB, use_db
     from cosmic_ray.work_item import TestOutcome
 
@@ -222,14 +233,36 @@ def _survivors(session: Path) -> list[str]:
         for item, result in db.completed_work_items:
             if result.test_outcome == TestOutcome.SURVIVED:
                 for m in item.mutations:
-                    found.append(f"{Path(m.module_path).name}:{m.start_pos[0]} {m.operator_name} #{m.occurrence}")
-    return found
+                    where = f"{Path(m.module_path).name}:{m.start_pos[0]} {m.operator_name} #{m.occurrence}"
+                    found.append((where, result.diff or ""))
+    return sorted(found)
+
+
+def _diff_lines(diff: str) -> str:
+    """The changed lines of a unified diff, ``-old`` / ``+new``, on one line."""
+    return " / ".join(line.strip() for line in diff.splitlines()
+                      if line[:1] in "+-" and not line.startswith(("+++", "---")))
+
+
+def run_report(folder: Path, diffs: bool) -> None:
+    """Counts and survivors of the session databases (``*.sqlite``) kept by ``cosmic --keep``."""
+    print("| module | killed | survived | incompetent |")
+    print("|---|---|---|---|")
+    sessions = sorted(folder.glob("*.sqlite"))
+    for session in sessions:
+        counts = _counts(session)
+        print(f"| {session.stem} | {counts.get('killed', 0)} | {counts.get('survived', 0)} | "
+              f"{counts.get('incompetent', 0)} |")
+    print()
+    for session in sessions:
+        for where, diff in _survivors(session):
+            print(f"- {where}" + (f": `{_diff_lines(diff)}`" if diffs else ""))
 
 
 def run_cosmic(modules: list[str], size: int, seed: int, timeout: float, keep: Path | None) -> None:
     print("| module | tests | mutants | sampled | killed | survived | incompetent | minutes |")
     print("|---|---|---|---|---|---|---|---|")
-    survivors: dict[str, list[str]] = {}
+    survivors: dict[str, list[tuple[str, str]]] = {}
     for module in modules:
         with tempfile.TemporaryDirectory(prefix="meshcorr-cr-") as folder:
             root = _copy_tree(Path(folder))
@@ -251,10 +284,7 @@ def run_cosmic(modules: list[str], size: int, seed: int, timeout: float, keep: P
             subprocess.run(["cosmic-ray", "exec", str(config), str(session)], cwd=root, env=env, check=True,
                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
             minutes = (time.perf_counter() - start) / 60
-            con = sqlite3.connect(session)
-            counts = dict(con.execute("SELECT test_outcome, COUNT(*) FROM work_results "
-                                      "WHERE worker_outcome != 'skipped' GROUP BY test_outcome"))
-            con.close()
+            counts = _counts(session)
             survivors[module] = _survivors(session)
             if keep is not None:
                 keep.mkdir(parents=True, exist_ok=True)
@@ -263,9 +293,9 @@ def run_cosmic(modules: list[str], size: int, seed: int, timeout: float, keep: P
               f"{counts.get('killed', 0)} | {counts.get('survived', 0)} | {counts.get('incompetent', 0)} | "
               f"{minutes:.1f} |", flush=True)
     print()
-    for module, found in survivors.items():
-        for line in found:
-            print(f"- survivor {module}: {line}")
+    for found in survivors.values():
+        for where, diff in found:
+            print(f"- survivor {where}: `{_diff_lines(diff)}`")
 
 
 def main() -> None:
@@ -280,9 +310,14 @@ def main() -> None:
     cosmic.add_argument("--seed", type=int, default=0)
     cosmic.add_argument("--timeout", type=float, default=120.0, help="seconds per mutant")
     cosmic.add_argument("--keep", type=Path, help="copy the session databases here")
+    report = sub.add_parser("report", help="counts and survivors of kept cosmic-ray sessions")
+    report.add_argument("folder", type=Path, help="the --keep folder of a cosmic run")
+    report.add_argument("--diffs", action="store_true", help="show each survivor's change")
     args = parser.parse_args()
     if args.run == "hand":
         run_hand(args.only, args.timeout)
+    elif args.run == "report":
+        run_report(args.folder, args.diffs)
     else:
         run_cosmic(args.module, args.sample, args.seed, args.timeout, args.keep)
 

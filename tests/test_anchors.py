@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+import meshcorr.anchors as anchors_module
 from meshcorr.anchors import anchor_descriptors, proximity_matching, select_anchors
 from meshcorr.errors import ParameterError
 
@@ -13,7 +14,15 @@ def line(n):
     return x[:, None], lambda i: np.abs(x - x[i])
 
 
-def test_first_anchor_is_the_best_pair_and_later_ones_spread():
+@pytest.fixture(params=["exact", "candidates"])
+def search(request, monkeypatch):
+    """Anchor selection over all pairs, or over each vertex's nearest candidates (large meshes)."""
+    if request.param == "candidates":
+        monkeypatch.setattr(anchors_module, "EXACT_PAIRS", 0)
+    return request.param
+
+
+def test_first_anchor_is_the_best_pair_and_later_ones_spread(search):
     X, g = line(50)
     Y = X.copy()
     anchors = select_anchors(X, Y, g, g, 3)
@@ -21,6 +30,15 @@ def test_first_anchor_is_the_best_pair_and_later_ones_spread():
     assert len(set(anchors[:, 0])) == 3
     # Each new anchor is pushed away from the earlier ones: both ends get one.
     assert {0, 49} <= set(anchors[:, 0].tolist())
+
+
+def test_later_anchors_weigh_half_of_each_geodesic_distance(search):
+    # After the exact pair (0, 0), pair (i, j) scores |X_i - Y_j| - (g(0, i) + g(0, j)) / 2:
+    # (1, 1) scores 0 - 0.2 = -0.2 and (2, 2) 1.2 - 1.0 = 0.2, so (1, 1) is next. With a
+    # weight of 1.5 instead of 0.5, (2, 2) would score 1.2 - 3.0 = -1.8 and be chosen.
+    X, Y = np.array([[0.0], [5.0], [10.0]]), np.array([[0.0], [5.0], [11.2]])
+    G = np.array([[0.0, 0.2, 1.0], [0.2, 0.0, 0.8], [1.0, 0.8, 0.0]])
+    np.testing.assert_array_equal(select_anchors(X, Y, G.__getitem__, G.__getitem__, 2), [[0, 0], [1, 1]])
 
 
 def test_proximity_matching_on_identical_shapes_is_the_identity():

@@ -11,7 +11,7 @@ from meshcorr import datasets  # noqa: E402
 from meshcorr.cli import main  # noqa: E402
 from meshcorr.errors import ParameterError  # noqa: E402
 from meshcorr.io import write_map, write_mesh  # noqa: E402
-from meshcorr.transfer import check_map, pull_back  # noqa: E402
+from meshcorr.transfer import check_map, pull_back, read_attribute  # noqa: E402
 from meshcorr.viz.colors import part_colors, scalar_colors  # noqa: E402
 
 
@@ -162,7 +162,7 @@ def test_pull_back_and_check_map():
     assert np.isnan(pull_back(np.array([1.0, 2.0]), np.array([-1, 1]))[0])
     with pytest.raises(ParameterError, match="1-D array of integer"):
         check_map(np.zeros(3), 3, 3)
-    with pytest.raises(ParameterError, match="outside"):
+    with pytest.raises(ParameterError, match=r"entry 1 is -2, outside the target's vertex range 0\.\.2 "):
         check_map(np.array([0, -2, 1]), 3, 3)
 
 
@@ -200,6 +200,26 @@ def test_transfer_colours_follow_the_map(pair, tmp_path):
         got = _ply_colors(out)
         np.testing.assert_array_equal(got[3:], colors[mapping[3:]])
         np.testing.assert_array_equal(got[:3], np.full((3, 3), 170))
+
+
+def test_read_attribute_tables(pair, tmp_path):
+    n = pair["n_target"]
+    target = pair["target_shape"]
+    rng = np.random.default_rng(1)
+    field = rng.normal(size=n)
+    np.save(tmp_path / "column.npy", field[:, None])  # one column: a scalar field
+    np.testing.assert_array_equal(read_attribute(str(tmp_path / "column.npy"), None, target.vertices,
+                                                 target.faces), field)
+    rgba = rng.integers(0, 256, size=(n, 4))
+    np.savetxt(tmp_path / "rgba.txt", rgba, fmt="%d")  # the alpha channel is dropped
+    got = read_attribute(str(tmp_path / "rgba.txt"), None, target.vertices, target.faces)
+    assert got.dtype == np.uint8
+    np.testing.assert_array_equal(got, rgba[:, :3])
+    for bad in (-1, 256):
+        rgba[5, 1] = bad
+        np.savetxt(tmp_path / "bad.txt", rgba, fmt="%d")
+        with pytest.raises(ParameterError, match="colour channels must lie in 0..255"):
+            read_attribute(str(tmp_path / "bad.txt"), None, target.vertices, target.faces)
 
 
 def test_transfer_scalar_field(pair, tmp_path):

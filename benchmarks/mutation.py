@@ -204,7 +204,12 @@ def _sample(session: Path, size: int, seed: int) -> tuple[int, int]:
     from cosmic_ray.work_item import WorkerOutcome, WorkResult
 
     with use_db(str(session), WorkDB.Mode.open) as db:
-        items = sorted(item.job_id for item in db.pending_work_items)
+        # Job ids are random: order the mutants by what they change, so a seed picks the same ones.
+        def spec(item):
+            m = item.mutations[0]
+            return (tuple(m.start_pos), m.operator_name, m.occurrence)
+
+        items = [item.job_id for item in sorted(db.pending_work_items, key=spec)]
         keep = set(items) if size <= 0 or size >= len(items) else set(random.Random(seed).sample(items, size))
         for job_id in items:
             if job_id not in keep:

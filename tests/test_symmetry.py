@@ -191,6 +191,26 @@ def test_unreliable_orientation_falls_back_to_distortion():
     assert chosen is b and other is a
 
 
+def test_the_alternative_has_the_other_orientation():
+    # A second orientation-preserving candidate agrees better than the mirror, yet the
+    # alternative kept is the mirror: the best candidate of the opposite orientation.
+    right, second, mirror = _candidate(0, 0.9, 0.30), _candidate(1, 0.8, 0.31), _candidate(2, 0.1, 0.35)
+    chosen, other = choose([right, second, mirror], "auto")
+    assert chosen is right and other is mirror
+    chosen, other = choose([right, second, mirror], "mirror")
+    assert chosen is mirror and other is right
+    # Without a reliable orientation the alternative is the next least distorted, any orientation.
+    a, b, c = _candidate(0, 0.1, 0.5, 0.01), _candidate(1, 0.1, 0.5, 0.02), _candidate(2, 0.9, 0.3, 0.03)
+    chosen, other = choose([a, b, c], "auto", orientation_reliable=False)
+    assert chosen is a and other is b
+
+
+def test_an_orientation_score_of_one_half_counts_as_preserving():
+    edge, mirror = _candidate(0, 0.5, 0.30), _candidate(1, 0.1, 0.29)
+    chosen, other = choose([edge, mirror], "auto")
+    assert chosen is edge and other is mirror
+
+
 def test_right_map_missing_when_preserving_candidates_agree_worse():
     mirror, half_turn = _candidate(0, 0.1, 0.36), _candidate(1, 0.9, 0.44)
     assert right_map_missing([mirror, half_turn])  # 0.44 > 1.15 x 0.36

@@ -18,6 +18,7 @@ Not part of the test command: it takes minutes to an hour. Usage::
     nice -n 10 python benchmarks/mutation.py cosmic --sample 40 --seed 0
     nice -n 10 python benchmarks/mutation.py cosmic --module validate --sample 0  # all
     python benchmarks/mutation.py report KEEP_FOLDER --diffs  # survivors of a --keep run
+    nice -n 10 python benchmarks/mutation.py recheck KEEP_FOLDER  # those survivors, tests of today
 
 Both print a Markdown table (``benchmarks/RESULTS-tests.md`` holds the last ones).
 """
@@ -141,7 +142,7 @@ MODULES = {
     "validate": ["tests/test_validate.py"],
     "io": ["tests/test_io.py"],
     "symmetry": ["tests/test_symmetry.py"],
-    "evaluation": ["tests/test_evaluation.py", "tests/test_cli_evaluate.py"],
+    "evaluation": ["tests/test_evaluation.py", "tests/test_evaluation_maps.py", "tests/test_cli_evaluate.py"],
 }
 
 
@@ -228,8 +229,8 @@ def _counts(session: Path) -> dict[str, int]:
         con.close()
 
 
-def _survivors(session: Path) -> list[tuple[str, str]]:
-    """``("file:line operator #occurrence", diff)`` of each survivor, from the session database."""
+def _surviving_mutations(session: Path) -> list[tuple[str, str, str]]:
+    """``(module_path, operator, occurrence)`` and the diff of each survivor of a session."""
     from cosmic_ray.work_db import WorkDB, use_db
     from cosmic_ray.work_item import TestOutcome
 
@@ -238,15 +239,35 @@ def _survivors(session: Path) -> list[tuple[str, str]]:
         for item, result in db.completed_work_items:
             if result.test_outcome == TestOutcome.SURVIVED:
                 for m in item.mutations:
-                    where = f"{Path(m.module_path).name}:{m.start_pos[0]} {m.operator_name} #{m.occurrence}"
-                    found.append((where, result.diff or ""))
-    return sorted(found)
+                    found.append(((str(m.module_path), m.operator_name, str(m.occurrence)), result.diff or "",
+                                  f"{Path(m.module_path).name}:{m.start_pos[0]} {m.operator_name} #{m.occurrence}"))
+    return sorted(found, key=lambda f: f[2])
+
+
+def _survivors(session: Path) -> list[tuple[str, str]]:
+    """``("file:line operator #occurrence", diff)`` of each survivor, from the session database."""
+    return [(where, diff) for _, diff, where in _surviving_mutations(session)]
+
+
+def run_recheck(folder: Path, timeout: float) -> None:
+    """Apply each survivor of the kept sessions again and run its module's tests as they are now."""
+    print("| survivor (first run) | change | now |")
+    print("|---|---|---|")
+    for session in sorted(folder.glob("*.sqlite")):
+        for (module_path, operator, occurrence), diff, where in _surviving_mutations(session):
+            with tempfile.TemporaryDirectory(prefix="meshcorr-re-") as tmp:
+                root = _copy_tree(Path(tmp))
+                subprocess.run(["cosmic-ray", "apply", module_path, operator, occurrence], cwd=root,
+                               env=_env(root), check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                now = _pytest(root, MODULES[session.stem], timeout)
+            print(f"| {where} | `{_diff_lines(diff)}` | {now} |", flush=True)
 
 
 def _diff_lines(diff: str) -> str:
     """The changed lines of a unified diff, ``-old`` / ``+new``, on one line."""
-    return " / ".join(line.strip() for line in diff.splitlines()
-                      if line[:1] in "+-" and not line.startswith(("+++", "---")))
+    changed = " / ".join(line.strip() for line in diff.splitlines()
+                         if line[:1] in "+-" and not line.startswith(("+++", "---")))
+    return changed.replace("|", "\\|")  # inside a Markdown table
 
 
 def run_report(folder: Path, diffs: bool) -> None:
@@ -318,11 +339,16 @@ def main() -> None:
     report = sub.add_parser("report", help="counts and survivors of kept cosmic-ray sessions")
     report.add_argument("folder", type=Path, help="the --keep folder of a cosmic run")
     report.add_argument("--diffs", action="store_true", help="show each survivor's change")
+    recheck = sub.add_parser("recheck", help="survivors of kept cosmic-ray sessions against today's tests")
+    recheck.add_argument("folder", type=Path, help="the --keep folder of a cosmic run")
+    recheck.add_argument("--timeout", type=float, default=300.0, help="seconds per test run")
     args = parser.parse_args()
     if args.run == "hand":
         run_hand(args.only, args.timeout)
     elif args.run == "report":
         run_report(args.folder, args.diffs)
+    elif args.run == "recheck":
+        run_recheck(args.folder, args.timeout)
     else:
         run_cosmic(args.module, args.sample, args.seed, args.timeout, args.keep)
 

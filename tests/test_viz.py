@@ -162,8 +162,8 @@ def test_pull_back_and_check_map():
     assert np.isnan(pull_back(np.array([1.0, 2.0]), np.array([-1, 1]))[0])
     with pytest.raises(ParameterError, match="1-D array of integer"):
         check_map(np.zeros(3), 3, 3)
-    with pytest.raises(ParameterError, match=r"entry 1 is -2, outside the target's vertex range 0\.\.2 "):
-        check_map(np.array([0, -2, 1]), 3, 3)
+    with pytest.raises(ParameterError, match=r"entry 1 is -2, outside the target's vertex range 0\.\.3 "):
+        check_map(np.array([0, -2, 1]), 3, 4)
 
 
 def test_colorings_are_valid():

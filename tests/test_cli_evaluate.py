@@ -145,7 +145,7 @@ def test_bench_real_spectral_run_and_curves(dataset, tmp_path, capsys):
     rows = list(csv.DictReader((out / "results.csv").open()))
     assert {r["class"] for r in rows} == {"tube", "fig"} and all(r["status"] == "ok" for r in rows)
     assert all(float(r["mean_error"]) == 0.0 for r in rows)
-    assert sum(float(r["seconds"]) for r in rows) <= seconds  # each pair's time, in seconds
+    assert max(float(r["seconds"]) for r in rows) <= seconds  # each pair's time, in seconds
     png = out / "curves.png"
     assert png.read_bytes()[:4] == b"\x89PNG" and png.stat().st_size < 150_000
 

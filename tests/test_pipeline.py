@@ -53,8 +53,9 @@ def test_result_holds_every_stage(timed_result, shape):
     assert result.runner_up.cost >= result.configuration.cost
     assert result.anchors.shape == (3, 2)
     assert set(result.timings) >= {"load", "geodesics", "embedding", "reorder", "icp", "matching"}
-    # The stages are disjoint parts of the call and cover nearly all of it (measured 96-97 %).
-    assert 0.5 * seconds <= sum(result.timings.values()) <= seconds
+    # The stages are disjoint parts of the call and cover nearly all of it (measured 96-97 %;
+    # the lower bound only catches a wrong unit).
+    assert 0.2 * seconds <= sum(result.timings.values()) <= seconds
     summary = result.summary()
     assert summary["n_mapped"] == n and summary["configuration"]["cost"] == pytest.approx(0.0, abs=1e-9)
 

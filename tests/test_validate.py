@@ -114,8 +114,9 @@ def test_negative_index():
         validate_mesh(TET_V, f)
 
 
-def test_repeated_vertex_in_face():
-    f = np.vstack([TET_F, [[0, 1, 1]]])
+@pytest.mark.parametrize("face", [[1, 1, 2], [0, 1, 1], [1, 2, 1]])  # each pair of corners
+def test_repeated_vertex_in_face(face):
+    f = np.vstack([TET_F, [face]])
     with pytest.raises(MeshError, match=r"1 degenerate face \(1 with a repeated vertex index, 0 with zero area; face 4\)"):
         validate_mesh(TET_V, f)
 

@@ -164,6 +164,8 @@ def test_pull_back_and_check_map():
         check_map(np.zeros(3), 3, 3)
     with pytest.raises(ParameterError, match=r"entry 1 is -2, outside the target's vertex range 0\.\.3 "):
         check_map(np.array([0, -2, 1]), 3, 4)
+    with pytest.raises(ParameterError, match=r"entry 2 is 9, outside the target's vertex range 0\.\.3 "):
+        check_map(np.array([0, 3, 9]), 3, 4)
 
 
 def test_colorings_are_valid():
@@ -215,6 +217,9 @@ def test_read_attribute_tables(pair, tmp_path):
     got = read_attribute(str(tmp_path / "rgba.txt"), None, target.vertices, target.faces)
     assert got.dtype == np.uint8
     np.testing.assert_array_equal(got, rgba[:, :3])
+    np.savetxt(tmp_path / "two.txt", rgba[:, :2], fmt="%d")  # neither a field nor colours
+    with pytest.raises(ParameterError, match=r"has shape \(\d+, 2\); expected one row per target vertex"):
+        read_attribute(str(tmp_path / "two.txt"), None, target.vertices, target.faces)
     for bad in (-1, 256):
         rgba[5, 1] = bad
         np.savetxt(tmp_path / "bad.txt", rgba, fmt="%d")

@@ -209,6 +209,10 @@ def test_an_orientation_score_of_one_half_counts_as_preserving():
     edge, mirror = _candidate(0, 0.5, 0.30), _candidate(1, 0.1, 0.29)
     chosen, other = choose([edge, mirror], "auto")
     assert chosen is edge and other is mirror
+    # ... also for the alternative of a reversing choice: the 0.5 one, not the better reversing one.
+    cheapest, edge, reversing = _candidate(0, 0.1, 0.5), _candidate(1, 0.5, 0.4), _candidate(2, 0.1, 0.3)
+    chosen, other = choose([cheapest, edge, reversing], "cost")
+    assert chosen is cheapest and other is edge
 
 
 def test_right_map_missing_when_preserving_candidates_agree_worse():
@@ -216,6 +220,7 @@ def test_right_map_missing_when_preserving_candidates_agree_worse():
     assert right_map_missing([mirror, half_turn])  # 0.44 > 1.15 x 0.36
     assert not right_map_missing([mirror, half_turn, _candidate(4, 0.9, 0.34)])
     assert not right_map_missing([mirror, _candidate(1, 0.9, 0.40)])  # within 15 %
+    assert not right_map_missing([_candidate(0, 0.1, 0.25), _candidate(1, 0.9, 0.5)], ratio=2.0)  # at it
     assert right_map_missing([mirror])  # nothing preserves orientation
     assert not right_map_missing([half_turn])  # nothing to compare with
     with pytest.raises(ParameterError, match="'ratio' parameter"):
@@ -235,6 +240,7 @@ def test_candidate_ranks_keep_near_ties_and_the_runner_up():
     assert candidate_ranks(configs, tolerance=0.25) == [0, 1, 3]
     assert candidate_ranks(configs, tolerance=0.0) == [0, 1]
     assert candidate_ranks(configs, tolerance=1.0, max_candidates=3) == [0, 1, 3]
+    assert candidate_ranks(configs, tolerance=1.0, max_candidates=2) == [0, 1]  # the smallest allowed
     assert candidate_ranks(configs[:1]) == [0]
     with pytest.raises(ParameterError, match="symmetry_tolerance"):
         candidate_ranks(configs, tolerance=-1)

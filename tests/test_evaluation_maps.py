@@ -40,3 +40,11 @@ def test_unmapped_entries_are_allowed_and_counted(sphere):
 def test_the_cover_of_one_pair_is_its_true_vertex():
     np.testing.assert_array_equal(_greedy_cover(np.array([3]), np.array([7])), [7])
     assert _greedy_cover(np.array([], dtype=np.int64), np.array([], dtype=np.int64)).size == 0
+
+
+def test_a_map_as_close_to_the_mirror_as_to_the_truth_is_not_flipped(sphere):
+    vertices, faces = sphere
+    truth = identity_truth(len(vertices), len(vertices))
+    shifted = np.roll(np.arange(len(vertices)), 1)
+    report = evaluate_map((vertices, faces), shifted, truth, sym_truth=truth)
+    assert report["sym_mean_error"] == report["mean_error"] > 0 and report["flipped"] is False

@@ -20,6 +20,10 @@ class ParameterError(MeshcorrError, ValueError):
     """An option has an invalid value."""
 
 
+class PreparedShapeError(MeshcorrError, ValueError):
+    """A prepared shape (or cache file) was made for another mesh, other settings or another version."""
+
+
 class MeshWarning(UserWarning):
     """A mesh was changed on input (e.g. polygons triangulated) or is suspicious."""
 

@@ -13,7 +13,9 @@ import warnings
 
 from .. import __version__
 from ..errors import MeshcorrError
+from . import batch as _batch
 from . import bench as _bench
+from . import cache as _cache
 from . import embed as _embed
 from . import evaluate as _evaluate
 from . import match as _match
@@ -21,7 +23,7 @@ from . import show as _show
 from . import transfer as _transfer
 
 #: Sub-command modules, in the order ``--help`` lists them.
-COMMANDS = [_match, _evaluate, _bench, _show, _transfer, _embed]
+COMMANDS = [_match, _evaluate, _bench, _show, _transfer, _embed, _batch, _cache]
 
 EXIT_USAGE = 2
 EXIT_ERROR = 1

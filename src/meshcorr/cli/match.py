@@ -10,7 +10,7 @@ import sys
 from ..baselines import METHODS, SPATIAL_METHODS
 from ..errors import ParameterError
 from ..geodesics import GEODESIC_METHODS
-from ..modes import MODES, N_LANDMARKS, SCALABLE_ABOVE
+from ..modes import MODES, N_SAMPLES, SCALABLE_ABOVE
 from ..reorder import REORDER_MODES
 from ._progress import StageProgress
 
@@ -89,8 +89,9 @@ def add_parser(sub) -> None:
                    help="dense: all-pairs geodesics and exact eigenpairs (n x n memory, the reference); "
                         f"scalable: landmark geodesics and the Nystrom extension; auto: dense up to "
                         f"{SCALABLE_ABOVE} vertices if it fits in --max-memory, else scalable (default: auto)")
-    s.add_argument("--landmarks", type=int, default=N_LANDMARKS, dest="n_landmarks", metavar="N",
-                   help=f"landmark vertices of the scalable mode (default: {N_LANDMARKS})")
+    s.add_argument("--samples", type=int, default=N_SAMPLES, dest="n_samples", metavar="N",
+                   help=f"Nystrom samples (landmark vertices) of the scalable mode (default: {N_SAMPLES})")
+    s.add_argument("--landmarks", metavar="FILE", dest="landmarks_file", help=argparse.SUPPRESS)
     s.add_argument("--max-memory", metavar="SIZE", default=None,
                    help="memory the dense mode may use, e.g. 4GiB or 500MB; larger inputs are refused "
                         "(default: 80%% of the memory available)")
@@ -124,6 +125,12 @@ def run(args) -> int:
     from .. import match
     from ..io import write_map
 
+    if args.landmarks_file is not None:
+        if args.landmarks_file.strip().isdigit():
+            raise ParameterError(f"--landmarks N was renamed --samples N (the Nystrom sample count of the "
+                                 f"scalable mode): use --samples {args.landmarks_file.strip()}.")
+        raise ParameterError("--landmarks FILE (user landmark pairs) is not supported yet; for the Nystrom "
+                             "sample count use --samples N.")
     check_output_path(args.output)
     if args.alternative_out:
         check_output_path(args.alternative_out)
@@ -140,7 +147,7 @@ def run(args) -> int:
                    anchor_weight=args.anchor_weight, bijective=args.bijective,
                    largest_component=args.largest_component, random_state=args.seed,
                    progress=progress, method=args.method, prealign=args.prealign, mode=args.mode,
-                   n_landmarks=args.n_landmarks, max_memory=args.max_memory)
+                   n_samples=args.n_samples, max_memory=args.max_memory)
     write_map(args.output, result.map)
     if args.alternative_out:
         if result.alternative_map is None:

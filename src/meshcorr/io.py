@@ -1,26 +1,38 @@
 """Read and write meshes and vertex maps.
 
-Meshes are read with trimesh without processing, so vertex ``i`` of the file
-is vertex ``i`` of the arrays (correspondences are reported by vertex index).
-Every file is written atomically: to a temporary file in the same directory,
-then moved over the target with :func:`os.replace`.
+Meshes are read without processing, so vertex ``i`` of the file is vertex
+``i`` of the arrays (correspondences are reported by vertex index): OFF by
+:mod:`meshcorr.off`, which checks every record against the header, the other
+formats by trimesh after the checks of :func:`read_mesh`. Every file is
+written atomically: to a temporary file in the same directory, then moved
+over the target with :func:`os.replace`; :func:`check_outputs` refuses
+output paths that cannot be written (or are inputs) before any work, and
+:func:`staged_writes` moves several outputs into place only once all are
+written.
 """
 
 from __future__ import annotations
 
+import io
 import os
 import re
 import secrets
+import stat
 import warnings
+from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 from typing import BinaryIO, Callable
 
 import numpy as np
 import trimesh
 
-from meshcorr.errors import MeshError, MeshWarning, ParameterError
+from meshcorr._interrupt import deferred_interrupt
+from meshcorr.errors import InputError, MeshError, MeshWarning, OutputError, ParameterError
+from meshcorr.off import parse_off
 
-__all__ = ["SUPPORTED_FORMATS", "atomic_write", "read_map", "read_mesh", "write_map", "write_mesh"]
+__all__ = ["SUPPORTED_FORMATS", "atomic_write", "check_outputs", "read_map", "read_mesh", "staged_writes",
+           "write_map", "write_mesh"]
 
 #: File extensions read_mesh and write_mesh understand, and their format names.
 SUPPORTED_FORMATS = {".off": "OFF", ".obj": "OBJ", ".ply": "PLY", ".stl": "STL"}
@@ -34,33 +46,8 @@ def _int_or_none(text) -> int | None:
         return None
 
 
-def _off_header(data: bytes) -> tuple[int | None, int | None, int]:
-    """Declared (vertex count, face count) of an OFF file and the offset after the header."""
-    tokens: list[bytes] = []
-    offset = 0
-    for line in data[:65536].splitlines(keepends=True):
-        offset += len(line)
-        tokens.extend(line.split(b"#", 1)[0].split())
-        if tokens and tokens[0].endswith(b"OFF"):  # OFF, COFF, NOFF, "OFF 6 2 0", ...
-            if len(tokens) >= 4:
-                return _int_or_none(tokens[1]), _int_or_none(tokens[2]), offset
-        elif len(tokens) >= 3:  # header without the OFF keyword
-            return _int_or_none(tokens[0]), _int_or_none(tokens[1]), offset
-    return None, None, 0
-
-
-def _off_polygons(data: bytes, n_vertices: int, offset: int) -> int:
-    """Number of face records with more than 3 sides in an ASCII OFF body."""
-    lines = (l.split(b"#", 1)[0].split() for l in data[offset:].splitlines())
-    records = [l for l in lines if l][n_vertices:]
-    return sum(1 for rec in records if (_int_or_none(rec[0]) or 0) > 3)
-
-
 def _declared_counts(data: bytes, fmt: str) -> tuple[int | None, int | None]:
     """(vertex records, face records) a file declares, read cheaply as text; None if unknown."""
-    if fmt == "OFF":
-        n_v, n_f, _ = _off_header(data)
-        return n_v, n_f
     if fmt == "OBJ":
         return (
             len(re.findall(rb"^v[ \t]", data, flags=re.MULTILINE)),
@@ -78,14 +65,12 @@ def _declared_counts(data: bytes, fmt: str) -> tuple[int | None, int | None]:
 
 
 def _count_polygons(data: bytes, fmt: str, n_vertices: int | None) -> int | None:
-    """Exact number of faces with more than 3 sides, where cheap to find (OBJ, OFF)."""
+    """Exact number of faces with more than 3 sides, where cheap to find (OBJ)."""
     if fmt == "OBJ":
         return sum(
             1 for rec in re.findall(rb"^f[ \t]+([^\n]*)", data, flags=re.MULTILINE)
             if len(rec.split(b"#", 1)[0].split()) > 3
         )
-    if fmt == "OFF" and n_vertices is not None:
-        return _off_polygons(data, n_vertices, _off_header(data)[2])
     return None
 
 
@@ -110,20 +95,72 @@ def _read_plain_off(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
         records = np.array(tokens[4 + 3 * n_v:], dtype=np.int64).reshape(n_f, 4)
     except ValueError:
         return None
-    if (records[:, 0] != 3).any():
-        return None
-    return vertices, np.ascontiguousarray(records[:, 1:])
+    faces = np.ascontiguousarray(records[:, 1:])
+    if (records[:, 0] != 3).any() or not np.isfinite(vertices).all() or faces.min() < 0 or faces.max() >= n_v:
+        return None  # the strict reader says where the problem is
+    return vertices, faces
+
+
+def _text(data: bytes, label: str, fmt: str) -> bytes:
+    """A text format's bytes as UTF-8: Latin-1 (any byte) where they are not UTF-8 already.
+
+    trimesh would guess the encoding of non-UTF-8 text with charset_normalizer,
+    an optional dependency; numbers and keywords are ASCII in any case.
+    """
+    if b"\x00" in data:
+        raise MeshError(f"{label}: holds NUL bytes, so it is not a {fmt} text file (a binary file "
+                        "with the wrong extension?). Check the file and its extension.")
+    try:
+        data.decode("utf-8")
+        return data
+    except UnicodeDecodeError:
+        return data.decode("latin-1").encode("utf-8")
+
+
+def _check_obj(data: bytes, label: str) -> None:
+    """Every ``f`` record of an OBJ file lists at least three vertices (else: truncated)."""
+    for match in re.finditer(rb"^f([ \t][^\r\n]*)?$", data, flags=re.MULTILINE):
+        refs = (match.group(1) or b"").split(b"#", 1)[0].split()
+        if len(refs) < 3:
+            line = data.count(b"\n", 0, match.start()) + 1
+            raise MeshError(f"{label}, line {line}: a face lists {len(refs)} vertices; a face needs at "
+                            "least 3 (is the file truncated?). Re-export the mesh or repair the line.")
+
+
+def _check_binary_formats(data: bytes, label: str, fmt: str) -> bytes:
+    """The data trimesh gets for PLY and STL, refused early where it is neither binary nor text of the format."""
+    if fmt == "PLY":
+        if not data.startswith(b"ply") or b"end_header" not in data[:65536]:
+            raise MeshError(f"{label}: not a PLY file (it does not start with 'ply' and a header ending in "
+                            "'end_header'). Check the file and its extension.")
+        return data
+    # STL: binary if the size matches the triangle count of the 84-byte header, else ASCII text.
+    if len(data) >= 84 and len(data) == 84 + 50 * int.from_bytes(data[80:84], "little"):
+        return data
+    if not data.lstrip()[:5].lower() == b"solid":
+        raise MeshError(f"{label}: neither a binary STL (its size does not match the triangle count in its "
+                        "header: truncated?) nor an ASCII STL (starting with 'solid'). "
+                        "Re-export the mesh.")
+    return _text(data, label, fmt)
 
 
 def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Read a triangle mesh from an OFF, OBJ, PLY or STL file, keeping vertex order.
 
-    Vertices are neither merged nor reordered (trimesh ``process=False``; for
-    OBJ also ``maintain_order=True`` so texture coordinates do not split
-    vertices), so vertex ``i`` of the file is row ``i`` of ``vertices``.
-    The exception is STL, which stores three unshared vertices per triangle:
-    there duplicate vertices are merged, as an STL file has no vertex order.
-    Polygons are triangulated by trimesh; a :class:`MeshWarning` says so.
+    Vertices are neither merged nor reordered (OFF by :func:`meshcorr.off.parse_off`;
+    the other formats by trimesh with ``process=False``, for OBJ also
+    ``maintain_order=True`` so texture coordinates do not split vertices),
+    so vertex ``i`` of the file is row ``i`` of ``vertices``. The exception
+    is STL, which stores three unshared vertices per triangle: there
+    duplicate vertices are merged, as an STL file has no vertex order.
+
+    The input rules (README, "Reading meshes: input rules"): the header
+    counts of OFF and PLY are checked against the data and each face's
+    arity against its indices (OFF: every record; OBJ: faces of fewer than
+    three vertices); text may be in any ASCII-compatible encoding (bytes
+    that are not UTF-8 are read as Latin-1, in comments say); polygons are
+    triangulated with a :class:`MeshWarning`. Everything else that does not
+    fit is refused with the file, the line where it applies and the fix.
 
     Parameters
     ----------
@@ -143,8 +180,8 @@ def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]
     Raises
     ------
     MeshError
-        If the file is missing, empty, of an unsupported format, cannot be
-        parsed, holds several separate geometries or no faces.
+        If the file is missing, empty, of an unsupported format, truncated,
+        cannot be parsed, holds several separate geometries or no faces.
 
     Warns
     -----
@@ -155,22 +192,44 @@ def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]
     path = Path(path)
     label = name or str(path)
     if not path.is_file():
-        raise MeshError(f"No such file: {path}" if not path.exists() else f"Not a file: {path}")
+        which = f" (the {label} mesh)" if label != str(path) else ""
+        raise MeshError(f"No such file: {path}{which}. Check the path." if not path.exists()
+                        else f"Not a file: {path}{which}; give a mesh file.")
     fmt = SUPPORTED_FORMATS.get(path.suffix.lower())
     if fmt is None:
         raise MeshError(
             f"Unsupported mesh format '{path.suffix or '(no extension)'}' for {path}; "
             f"supported: {_SUPPORTED_LIST}. Convert the file first (e.g. in MeshLab)."
         )
-    data = path.read_bytes()
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise MeshError(f"{label}: cannot be read ({exc.strerror}). Check its permissions.") from exc
     if not data or data.isspace():
         raise MeshError(f"File is empty: {path}. Check that it was written completely.")
-    plain = _read_plain_off(data) if fmt == "OFF" else None
-    if plain is not None:
-        return plain
+    if fmt == "OFF":
+        plain = _read_plain_off(data)
+        if plain is not None:
+            return plain
+        vertices, faces, n_polygons, n_records = parse_off(data, label)
+        if not len(faces):
+            raise MeshError(f"{label}: the file contains no triangle faces (a point cloud?). "
+                            "meshcorr needs a triangle mesh.")
+        if n_polygons:
+            _warn_polygons(label, f"{n_polygons} polygonal faces", n_records, len(faces))
+        return vertices, faces
+    if fmt == "OBJ":
+        data = _text(data, label, fmt)
+        _check_obj(data, label)
+    else:
+        data = _check_binary_formats(data, label, fmt)
     options = {"maintain_order": True, "skip_materials": True} if fmt == "OBJ" else {}
     try:
-        scene = trimesh.load(path, file_type=fmt.lower(), process=False, force="scene", **options)
+        # trimesh's parsers catch BaseException in places (fast path, then a fallback): a
+        # Ctrl-C there would be swallowed, so it is delivered once the parse ends.
+        with deferred_interrupt():
+            scene = trimesh.load(io.BytesIO(data), file_type=fmt.lower(), process=False, force="scene",
+                                 **options)
     except Exception as exc:  # trimesh raises many types on corrupt input
         raise MeshError(
             f"{label}: the file could not be parsed as {fmt} ({type(exc).__name__}: {exc}). "
@@ -198,15 +257,11 @@ def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]
     n_vertex_records, n_face_records = _declared_counts(data, fmt)
     if n_face_records is not None and len(faces) > n_face_records:
         n_polygons = _count_polygons(data, fmt, n_vertex_records)
-        what = f"{n_polygons} polygonal faces" if n_polygons else "polygonal faces"
-        warnings.warn(
-            MeshWarning(
-                f"{label}: {what} with more than 3 sides were triangulated "
-                f"({n_face_records} faces in the file became {len(faces)} triangles). "
-                "Triangulate the mesh yourself to control how."
-            ),
-            stacklevel=2,
-        )
+        _warn_polygons(label, f"{n_polygons} polygonal faces" if n_polygons else "polygonal faces",
+                       n_face_records, len(faces))
+    if n_face_records is not None and fmt == "PLY" and len(faces) < n_face_records:
+        raise MeshError(f"{label}: the header declares {n_face_records} faces but {len(faces)} were read: "
+                        "the file is truncated or malformed. Re-export the mesh.")
     if n_vertex_records is not None and len(vertices) != n_vertex_records:
         if fmt == "OBJ" and len(vertices) < n_vertex_records:
             warnings.warn(
@@ -223,6 +278,17 @@ def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]
                 "Re-save the file (e.g. in MeshLab) without texture seams or extra data."
             )
     return vertices, faces
+
+
+def _warn_polygons(label: str, what: str, n_file_faces: int, n_triangles: int) -> None:
+    warnings.warn(
+        MeshWarning(
+            f"{label}: {what} with more than 3 sides were triangulated "
+            f"({n_file_faces} faces in the file became {n_triangles} triangles). "
+            "Triangulate the mesh yourself to control how."
+        ),
+        stacklevel=3,
+    )
 
 
 def atomic_write(path, writer: Callable[[BinaryIO], object]) -> None:

@@ -325,7 +325,7 @@ def test_vertex_count_mismatch_is_an_error(tmp_path, monkeypatch):
 def test_name_is_used_in_messages(tmp_path):
     path = tmp_path / "bad.off"
     path.write_text("OFF\n3 1 0\nx y z\n")
-    with pytest.raises(MeshError, match="^source mesh, line 3: vertex 0: expected three numbers"):
+    with pytest.raises(MeshError, match=r"^source mesh \S*bad.off, line 3: vertex 0: expected three numbers"):
         read_mesh(path, name="source mesh")
 
 
@@ -358,7 +358,7 @@ def test_read_map_missing(tmp_path):
 def test_read_map_non_integer_text(tmp_path):
     path = tmp_path / "m.txt"
     path.write_text("1\n\n2.5\n3\n")
-    with pytest.raises(ParameterError, match=r"line 3: expected one integer per line, got '2.5'"):
+    with pytest.raises(ParameterError, match=r"line 3: expected one integer per line .*, got '2.5'"):
         read_map(path)
 
 

@@ -139,9 +139,9 @@ def read_vts(path, n_vertices: int | None = None) -> np.ndarray:
     path = Path(path)
     values = []
     for number, line in _read_lines(path):
-        if not re.fullmatch(r"[+-]?\d+", line):
+        if not re.fullmatch(r"[+-]?\d{1,18}", line):  # 18 digits: always an int64
             raise InputError(f"{path}, line {number}: a .vts file holds one integer per line; "
-                                 f"got {line[:40]!r}.")
+                             f"got {line[:40]!r}.")
         values.append(int(line))
     vts = np.array(values, dtype=np.int64)
     if vts.min() < 1:
@@ -181,15 +181,15 @@ def read_pairs(path) -> GroundTruth:
     rows = []
     for number, line in _read_lines(path):
         fields = [f for f in re.split(r"[\s,:;]+", line) if f]
-        if not 1 <= len(fields) <= 2 or not all(re.fullmatch(r"[+-]?\d+", f) for f in fields):
+        if not 1 <= len(fields) <= 2 or not all(re.fullmatch(r"[+-]?\d{1,18}", f) for f in fields):
             raise InputError(f"{path}, line {number}: expected a 0-based vertex pair 'i j' "
-                                 f"(or one index per line); got {line[:40]!r}.")
+                             f"(or one index per line); got {line[:40]!r}.")
         rows.append((number, [int(f) for f in fields]))
     widths = {len(values) for _, values in rows}
     if len(widths) > 1:
         odd = next(number for number, values in rows if len(values) != len(rows[0][1]))
         raise InputError(f"{path}, line {odd}: mixes one- and two-column lines; use one index "
-                             "per line (a dense map) or one pair 'i j' per line throughout.")
+                         "per line (a dense map) or one pair 'i j' per line throughout.")
     table = np.array([values for _, values in rows], dtype=np.int64)
     if table.shape[1] == 1:
         target = table[:, 0]

@@ -93,7 +93,7 @@ def _read_plain_off(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
     try:
         vertices = np.array(tokens[4:4 + 3 * n_v], dtype=np.float64).reshape(n_v, 3)
         records = np.array(tokens[4 + 3 * n_v:], dtype=np.int64).reshape(n_f, 4)
-    except ValueError:
+    except (ValueError, OverflowError):  # the strict reader says where
         return None
     faces = np.ascontiguousarray(records[:, 1:])
     if (records[:, 0] != 3).any() or not np.isfinite(vertices).all() or faces.min() < 0 or faces.max() >= n_v:
@@ -253,6 +253,10 @@ def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]
         mesh.merge_vertices()
     vertices = np.array(mesh.vertices, dtype=np.float64)
     faces = np.array(mesh.faces, dtype=np.int64)
+    if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3:
+        raise MeshError(f"{label}: the file could not be parsed as a 3-D triangle mesh (vertices of shape "
+                        f"{vertices.shape}, faces of shape {faces.shape}; a vertex line with two coordinates?). "
+                        f"Check that it is a valid {fmt} file, e.g. by opening it in MeshLab.")
     if fmt == "STL":
         return vertices, faces
 

@@ -7,8 +7,8 @@ coordinates and ``n_faces`` lines ``k i_1 ... i_k [colour]``. ``#`` starts a
 comment, in any encoding; outside comments the file must be ASCII.
 
 Refused, with the line where it applies: a missing or non-numeric header,
-binary OFF, fewer vertex or face lines than the header declares (a
-truncated file), more lines than it declares, a vertex with fewer than
+binary OFF, counts larger than the file's line count, fewer vertex or face
+lines than the header declares (a truncated file), more lines than it declares, a vertex with fewer than
 three numbers or a non-finite one, a face with fewer than three vertices,
 fewer indices than its arity or an index outside ``[0, n_vertices)``.
 Faces with more than three sides are split into a fan of triangles
@@ -80,6 +80,15 @@ def _header(label: str, records) -> tuple[int, int, int]:
     return n_vertices, n_faces, number
 
 
+def _check_size(label: str, data: bytes, n_vertices: int, n_faces: int, header_line: int) -> None:
+    """Refuse counts the file cannot hold (one record a line) before allocating for them."""
+    n_lines = data.count(b"\n") + 1
+    if n_vertices + n_faces > n_lines:
+        raise _fail(label, header_line, f"the header declares {n_vertices} vertices and {n_faces} faces, "
+                                        f"but the file has only {n_lines} lines: it is truncated or the "
+                                        "header is wrong")
+
+
 def parse_off(data: bytes, label: str) -> tuple[np.ndarray, np.ndarray, int, int]:
     """Vertices, triangles, and the polygon and face counts of an ASCII OFF file.
 
@@ -108,6 +117,7 @@ def parse_off(data: bytes, label: str) -> tuple[np.ndarray, np.ndarray, int, int
     """
     records = _records(data)
     n_vertices, n_faces, header_line = _header(label, records)
+    _check_size(label, data, n_vertices, n_faces, header_line)
     vertices = np.empty((n_vertices, 3))
     last = header_line
     for row in range(n_vertices):

@@ -8,8 +8,10 @@ errors into one-line messages with a non-zero exit code.
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 import warnings
+from contextlib import contextmanager
 
 from .. import __version__
 from ..errors import InputError, MeshcorrError, MeshError, MeshWarning
@@ -107,7 +109,7 @@ def main(argv: list[str] | None = None) -> int:
                 return EXIT_USAGE
             if args.quiet and args.verbose:
                 parser.error("-q/--quiet and -v/--verbose contradict each other; give one")
-            with warnings.catch_warnings():
+            with warnings.catch_warnings(), _quiet_trimesh():
                 warnings.showwarning = _show_warning
                 if args.quiet:
                     warnings.simplefilter("ignore", MeshWarning)
@@ -132,6 +134,18 @@ def main(argv: list[str] | None = None) -> int:
             print(f"meshcorr: internal error: {type(exc).__name__}: {exc}. "
                   "Run again with --debug for the traceback and report it.", file=sys.stderr)
             return EXIT_ERROR
+
+
+@contextmanager
+def _quiet_trimesh():
+    """Hide trimesh's log lines (tracebacks of the parsers it tries in turn): read_mesh's error says it."""
+    logger = logging.getLogger("trimesh")
+    level = logger.level
+    logger.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
 
 
 def _silence_stdout() -> None:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import collections
 import platform
+import re
 import sys
 import time
 from datetime import datetime, timezone
@@ -57,7 +58,8 @@ def fuzz(target: str, seconds: float, deadline_ms: int, counts: collections.Coun
             test()
         except Exception as error:  # noqa: BLE001 - a finding: record it and go on
             for one in getattr(error, "exceptions", [error]):  # hypothesis groups distinct failures
-                text = f"{type(one).__name__}: {str(one)[:400]}"
+                # One finding per message, whatever temporary folder it named.
+                text = re.sub(r"/tmp/tmp\w+/", "", f"{type(one).__name__}: {str(one)[:400]}")
                 if text not in found:
                     found.append(text)
                     notes = " / ".join(getattr(one, "__notes__", []))[:600]

@@ -230,6 +230,14 @@ def test_obj_with_latin1_comment_reads(tmp_path):
     assert vertices.shape == (4, 3) and faces.shape == (4, 3)
 
 
+def test_non_finite_obj_vertex_is_refused(tmp_path):
+    """Found by the fuzzer: 'show' drew a NaN vertex and failed inside matplotlib."""
+    path = tmp_path / "nan.obj"
+    path.write_text("v nan 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+    with pytest.raises(MeshError, match=r"nan.obj: vertex 0 has a non-finite coordinate"):
+        read_mesh(path)
+
+
 def test_obj_face_cut_short_names_the_line(tmp_path):
     path = tmp_path / "cut.obj"
     path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2\n")

@@ -257,6 +257,10 @@ def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]
         raise MeshError(f"{label}: the file could not be parsed as a 3-D triangle mesh (vertices of shape "
                         f"{vertices.shape}, faces of shape {faces.shape}; a vertex line with two coordinates?). "
                         f"Check that it is a valid {fmt} file, e.g. by opening it in MeshLab.")
+    if not np.isfinite(vertices).all():
+        row = int(np.flatnonzero(~np.isfinite(vertices).all(axis=1))[0])
+        raise MeshError(f"{label}: vertex {row} has a non-finite coordinate (nan or inf). "
+                        "Repair or re-export the mesh.")
     if fmt == "STL":
         return vertices, faces
 

@@ -4,15 +4,10 @@ The main entry point is :func:`match`; see :mod:`meshcorr.pipeline` for the
 method (Jain & Zhang, SMI 2006).
 """
 
-from ._interrupt import deferred_interrupt
-
-# A Ctrl-C during the imports is delivered after them: trimesh's guards around
-# its optional imports catch BaseException and would leave it half-imported.
-with deferred_interrupt():
-    from .errors import MeshError, MeshWarning, MeshcorrError, ParameterError
-    from .mesh import Mesh, as_mesh
-    from .pipeline import match
-    from .result import Correspondence
+from .errors import MeshError, MeshWarning, MeshcorrError, ParameterError
+from .mesh import Mesh, as_mesh
+from .pipeline import match
+from .result import Correspondence
 
 __version__ = "0.1.0"
 

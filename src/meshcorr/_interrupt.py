@@ -4,7 +4,9 @@ Python raises KeyboardInterrupt in the main thread at whatever bytecode runs
 when SIGINT arrives. Two places cannot take it: code that catches
 ``BaseException`` (trimesh's guards around its optional imports turn a
 Ctrl-C during ``import trimesh`` into a half-imported module, and the run
-then fails later with an unrelated ``TypeError``), and the few bytecodes
+then fails later with an unrelated ``TypeError``; its parsers try a fast
+path and fall back on any exception, so a Ctrl-C while a file is parsed
+was lost: both measured, :mod:`meshcorr.io` holds SIGINT around them), and the few bytecodes
 between starting a worker thread and recording it, after which nothing
 would wait for the worker before the interpreter exits
 (:mod:`meshcorr._threads`). :func:`deferred_interrupt` holds a SIGINT that

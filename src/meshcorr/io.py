@@ -25,9 +25,11 @@ from pathlib import Path
 from typing import BinaryIO, Callable
 
 import numpy as np
-import trimesh
 
 from meshcorr._interrupt import deferred_interrupt
+
+with deferred_interrupt():  # trimesh's guards around its optional imports catch BaseException
+    import trimesh
 from meshcorr.errors import InputError, MeshError, MeshWarning, OutputError, ParameterError
 from meshcorr.off import parse_off
 

@@ -79,6 +79,9 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     rng = random.Random(args.seed)
+    # A child inherits an ignored SIGINT (this script run with '&' or nohup) and Python then keeps
+    # ignoring it: handle it here, so that the children start with the default disposition.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     env = dict(os.environ, PYTHONFAULTHANDLER="1")
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)

@@ -27,6 +27,7 @@ STAGES = ["load", "geodesics", "embedding", "reorder", "symmetry", "icp", "match
 # split from 40 points on, so that worker threads run in every stage.
 CHILD = textwrap.dedent("""
     import json, os, signal, sys, threading
+    signal.signal(signal.SIGINT, signal.default_int_handler)  # even if pytest runs with SIGINT ignored
     import meshcorr._threads as t
     import meshcorr.cli.match as cli_match
     from meshcorr.cli import main
@@ -90,8 +91,10 @@ def test_ctrl_c_in_every_stage_exits_130_with_no_output_and_no_thread_left(meshe
 def test_sigint_to_the_console_script_exits_130_and_writes_nothing(meshes, tmp_path):
     """The real signal path, from outside, while the pipeline runs."""
     output = tmp_path / "map.txt"
+    # preexec_fn: the child gets the default SIGINT even where pytest was started with it ignored.
     proc = subprocess.Popen([sys.executable, "-m", "meshcorr", "match", *meshes, "-o", str(output), "-v"],
-                            stderr=subprocess.PIPE, text=True, env=dict(os.environ, PYTHONFAULTHANDLER="1"))
+                            stderr=subprocess.PIPE, text=True, env=dict(os.environ, PYTHONFAULTHANDLER="1"),
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     line = ""
     while "[load]" not in line and "[geodesics]" not in line:  # -v reports each stage as it ends
         line = proc.stderr.readline()

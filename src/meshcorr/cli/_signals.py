@@ -17,9 +17,13 @@ def interrupt_once(*, ignore_after: bool = False):
     the block ends instead of restoring the previous handler: for a run that
     owns the process, so that a Ctrl-C while the interpreter exits (after the
     outputs are written) cannot turn a finished run into a traceback.
-    Outside the main thread the block runs with the handler as it is.
+    Outside the main thread, and where SIGINT is ignored (a job started in
+    the background by a shell without job control, or under ``nohup``: the
+    process was asked not to stop on Ctrl-C), the block runs with the
+    handler as it is.
     """
-    if threading.current_thread() is not threading.main_thread():
+    if (threading.current_thread() is not threading.main_thread()
+            or signal.getsignal(signal.SIGINT) is signal.SIG_IGN):
         yield
         return
     interrupted = False

@@ -96,13 +96,13 @@ def test_nystrom_errors():
     with pytest.raises(ParameterError, match="'k' parameter must be an int <= 3"):
         nystrom_eigenpairs(np.arange(3), D, 1.0, 4)
     # Three identical landmarks: rank 1.
-    with pytest.raises(ParameterError, match="numerical rank 1 < k=2.*more landmarks"):
+    with pytest.raises(ParameterError, match="numerical rank 1 < k=2.*more samples"):
         nystrom_eigenpairs(np.array([0, 0, 0]), D, 1.0, 2)
 
 
 def test_scalable_embedding_agrees_with_the_dense_one(creature):
     dense = dense_spectrum(creature, k=6, geodesic="heat", scale=True, random_state=0, timer=StageTimer())
-    approx = landmark_spectrum(creature, k=6, geodesic="heat", scale=True, n_landmarks=64,
+    approx = landmark_spectrum(creature, k=6, geodesic="heat", scale=True, n_samples=64,
                                random_state=0, timer=StageTimer())
     # sigma from the landmark rows (the dense one comes from the symmetrised matrix).
     assert approx.max_geodesic == pytest.approx(dense.max_geodesic, rel=0.01)
@@ -137,7 +137,7 @@ def test_scalable_and_dense_maps_agree_on_a_pose_pair(pose_pair):
     source, target, rest = pose_pair
     options = dict(refine=False, random_state=0)
     dense = meshcorr.match(source, target, mode="dense", **options)
-    scalable = meshcorr.match(source, target, mode="scalable", n_landmarks=48, **options)
+    scalable = meshcorr.match(source, target, mode="scalable", n_samples=48, **options)
     assert dense.params["mode"] == "dense" and scalable.params["mode"] == "scalable"
     # Same vertices and faces in both poses: the truth is the identity.
     truth = np.arange(rest.n_vertices)
@@ -195,8 +195,8 @@ def test_parse_memory(text, expected):
 
 @pytest.mark.parametrize("kwargs, message", [
     ({"mode": "fast"}, "'mode' parameter must be one of 'auto', 'dense', 'scalable'"),
-    ({"n_landmarks": 6}, "'n_landmarks' parameter must be an int >= 7"),
-    ({"n_landmarks": 10.5}, "'n_landmarks' parameter must be an int"),
+    ({"n_samples": 6}, "'n_samples' parameter must be an int >= 7"),
+    ({"n_samples": 10.5}, "'n_samples' parameter must be an int"),
     ({"max_memory": "lots"}, "'max_memory' parameter must be a positive number of bytes"),
     ({"max_memory": "4XB"}, "'max_memory' parameter must be"),
     ({"max_memory": -1}, "'max_memory' parameter must be"),
@@ -290,7 +290,7 @@ def test_cli_scalable_mode_and_memory_guard(tmp_path, capsys):
     import trimesh
 
     trimesh.Trimesh(shape.vertices, shape.faces, process=False).export(src)
-    code = main(["match", str(src), str(src), "-o", str(out), "--mode", "scalable", "--landmarks", "32",
+    code = main(["match", str(src), str(src), "-o", str(out), "--mode", "scalable", "--samples", "32",
                  "--no-refine", "-q"])
     assert code == 0
     assert np.mean(np.loadtxt(out, dtype=int) == np.arange(shape.n_vertices)) > 0.95

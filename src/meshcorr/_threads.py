@@ -65,6 +65,10 @@ def single_blas_thread():
 
 
 def _cores() -> int:
+    """Cores this process may use: ``$MESHCORR_THREADS`` if set (e.g. 1 in each worker process of
+    :mod:`meshcorr.collection`, which runs one process per core), else the CPU affinity."""
+    if os.environ.get("MESHCORR_THREADS", "").strip().isdigit():
+        return max(1, int(os.environ["MESHCORR_THREADS"]))
     try:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # pragma: no cover - not on Linux

@@ -32,6 +32,10 @@ class OutputError(ParameterError):
     """An output cannot be written where asked (no folder, no permission, an input's path)."""
 
 
+class PreparedShapeError(MeshcorrError, ValueError):
+    """A prepared shape (or cache file) was made for another mesh, other settings or another version."""
+
+
 class MeshWarning(UserWarning):
     """A mesh was changed on input (e.g. polygons triangulated) or is suspicious."""
 

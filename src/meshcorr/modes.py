@@ -7,7 +7,7 @@
     :class:`~meshcorr.errors.MemoryLimitError` when it would not fit in
     ``max_memory`` (:mod:`meshcorr.memory`).
 ``"scalable"``
-    ``m`` landmark geodesic rows and the Nyström extension
+    ``m`` sampled (landmark) geodesic rows and the Nyström extension
     (:func:`meshcorr.nystrom.landmark_spectrum`): ``O(n m)`` memory, never an
     ``n x n`` matrix.
 ``"auto"``
@@ -30,11 +30,11 @@ MODES = ("auto", "dense", "scalable")
 #: dense all-pairs heat geodesics take ~2 s per mesh there on 2 cores, the scalable mode ~0.1 s.
 SCALABLE_ABOVE = 2000
 
-#: Landmarks of the scalable mode: on TOSCA cat0 (5k) the embedding agrees with the dense one to
+#: Nyström samples (landmark vertices) of the scalable mode: on TOSCA cat0 (5k) the embedding agrees with the dense one to
 #: ~1.5 % (Procrustes residual) from 50 landmarks on, more do not improve it; on the Sumner cat
 #: subdivided to 29k and 115k vertices, 48 landmarks agree with 160 to 1.2-1.6 %, 32 to 2.5 %.
 #: Mean TOSCA error over 8 pairs: 0.087 with 48 or 64 landmarks.
-N_LANDMARKS = 48
+N_SAMPLES = 48
 
 
 def resolve_memory(max_memory) -> int | None:
@@ -66,11 +66,11 @@ def select_mode(mode: str, n1: int, n2: int, *, max_memory: int | None, scalable
     return mode
 
 
-def build_spectrum(mesh: Mesh, mode: str, *, k: int, geodesic: str, scale: bool, n_landmarks: int,
+def build_spectrum(mesh: Mesh, mode: str, *, k: int, geodesic: str, scale: bool, n_samples: int,
                    random_state: int | None, timer: StageTimer) -> Spectrum:
     """The :class:`~meshcorr.spectrum.Spectrum` of ``mesh`` in ``mode`` ("dense" or "scalable")."""
     if mode == "dense":
         return dense_spectrum(mesh, k=k, geodesic=geodesic, scale=scale, random_state=random_state,
                               timer=timer)
-    return landmark_spectrum(mesh, k=k, geodesic=geodesic, scale=scale, n_landmarks=n_landmarks,
+    return landmark_spectrum(mesh, k=k, geodesic=geodesic, scale=scale, n_samples=n_samples,
                              random_state=random_state, timer=timer)

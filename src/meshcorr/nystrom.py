@@ -32,6 +32,8 @@ The eigenvalues approximate those of the full ``n x n`` matrix (not of
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 
 from ._params import check_float, check_int
@@ -91,7 +93,7 @@ def _nystrom(landmarks, distances, sigma, k, rcond):
     if keep.sum() < k:
         raise ParameterError(
             f"The landmark affinity matrix has numerical rank {int(keep.sum())} < k={k}: the landmarks "
-            "are too few or too close together. Use more landmarks (n_landmarks / --landmarks) or a smaller k."
+            "are too few or too close together. Use more samples (n_samples / --samples) or a smaller k."
         )
     G = C @ (Q[:, keep] / np.sqrt(w[keep]))  # (n, r) = C W^{+1/2} in the basis of W's eigenvectors
     s2, V = np.linalg.eigh(G.T @ G)
@@ -101,16 +103,16 @@ def _nystrom(landmarks, distances, sigma, k, rcond):
     return s2, sign_convention(vectors)
 
 
-def landmark_spectrum(mesh: Mesh, *, k: int, geodesic: str, scale: bool, n_landmarks: int,
+def landmark_spectrum(mesh: Mesh, *, k: int, geodesic: str, scale: bool, n_samples: int,
                       random_state: int | None, timer: StageTimer) -> Spectrum:
-    """Approximate spectrum from ``m`` landmark geodesic rows (``O(n m)`` memory).
+    """Approximate spectrum from ``m`` sampled geodesic rows (``O(n m)`` memory).
 
     The scalable counterpart of :func:`meshcorr.spectrum.dense_spectrum`:
-    landmarks by geodesic farthest-point sampling
+    ``m`` sample (landmark) vertices by geodesic farthest-point sampling
     (:func:`meshcorr.landmarks.farthest_point_sampling`, one single-source
-    solve per landmark), sigma = the largest landmark distance (a lower
+    solve per sample), sigma = the largest sample distance (a lower
     bound of the largest geodesic distance, tight to solver accuracy since
-    the second landmark is the vertex farthest from the first), the top
+    the second sample is the vertex farthest from the first), the top
     ``k`` eigenpairs by :func:`nystrom_eigenpairs`, eigenvalue scaling and
     the first eigenvector dropped as in :func:`meshcorr.embedding.spectral_embedding`.
 
@@ -124,10 +126,10 @@ def landmark_spectrum(mesh: Mesh, *, k: int, geodesic: str, scale: bool, n_landm
         Geodesic solver name (see :mod:`meshcorr.geodesics`).
     scale : bool
         Eigenvalue scaling.
-    n_landmarks : int
-        m, landmarks (capped at n).
+    n_samples : int
+        m, Nyström samples (capped at n).
     random_state : int or None
-        Seed of the first landmark.
+        Seed of the first sample.
     timer : StageTimer
         Receives the "geodesics" and "embedding" stages.
 
@@ -135,14 +137,15 @@ def landmark_spectrum(mesh: Mesh, *, k: int, geodesic: str, scale: bool, n_landm
     -------
     spectrum : Spectrum
         ``geodesics_from(i)`` runs one single-source solve on the solver
-        built once for this mesh; rows of landmarks and of earlier queries
-        are cached (``n`` floats each; the pipeline asks for a few dozen).
+        built once for this mesh; rows of samples and of earlier queries
+        are cached in ``spectrum.rows`` (``n`` floats each; the pipeline
+        asks for a few dozen).
     """
     n = mesh.n_vertices
     with timer.stage("geodesics"):
         solver = geodesic_solver(mesh.vertices, mesh.faces, geodesic)
         landmarks = farthest_point_sampling(lambda i: solver.distances(np.array([i]))[0], n,
-                                            min(n_landmarks, n), random_state=random_state)
+                                            min(n_samples, n), random_state=random_state)
     with timer.stage("embedding"):
         sigma = landmarks.diameter
         values, vectors = nystrom_eigenpairs(landmarks.indices, landmarks.distances, sigma, k)
@@ -150,13 +153,29 @@ def landmark_spectrum(mesh: Mesh, *, k: int, geodesic: str, scale: bool, n_landm
         if scale:
             embedding = embedding * np.sqrt(np.clip(values[1:], 0.0, None))
     rows = {int(i): landmarks.distances[t] for t, i in enumerate(landmarks.indices)}
+    return Spectrum(values, embedding, sampled_rows(mesh, geodesic, rows, sigma, solver=solver), sigma,
+                    mode="scalable", rows=rows)
+
+
+def sampled_rows(mesh: Mesh, geodesic: str, rows: dict[int, np.ndarray], sigma: float, *,
+                 solver=None) -> Callable[[int], np.ndarray]:
+    """``geodesics_from(i)``: the geodesic row of vertex i divided by ``sigma``, ``(n,)``.
+
+    Rows already in ``rows`` (vertex -> unnormalised ``(n,)`` distances) are
+    returned from it; others are one single-source solve each, clipped at 0
+    with 0 at the source, and added to ``rows``. The solver is built on the
+    first solve when none is given (a loaded :class:`~meshcorr.prepared.PreparedShape`).
+    """
+    solvers = [solver]
 
     def geodesics_from(i: int) -> np.ndarray:
         i = int(i)
         if i not in rows:
-            row = np.maximum(solver.distances(np.array([i]))[0], 0.0)
+            if solvers[0] is None:
+                solvers[0] = geodesic_solver(mesh.vertices, mesh.faces, geodesic)
+            row = np.maximum(solvers[0].distances(np.array([i]))[0], 0.0)
             row[i] = 0.0
             rows[i] = row
         return rows[i] / sigma
 
-    return Spectrum(values, embedding, geodesics_from, sigma)
+    return geodesics_from

@@ -26,44 +26,53 @@ from ._threads import parallel_map
 from .anchors import EXACT_PAIRS, anchor_descriptors, embedding_neighbours, proximity_matching, select_anchors
 from .curvature import curvature_disagreement
 from .errors import MeshWarning, ParameterError
-from .geodesics import GEODESIC_METHODS
+from .extremities import find_extremities, match_extremities
 from .icp import tps_icp
-from .mesh import Mesh, MeshLike, as_mesh
-from .modes import MODES, N_LANDMARKS, SCALABLE_ABOVE, build_spectrum, resolve_memory, select_mode
+from .landmark_map import check_landmarks, landmark_map
+from .mesh import Mesh, MeshLike
+from .modes import MODES, N_SAMPLES, SCALABLE_ABOVE, resolve_memory, select_mode
 from .orientation import mesh_orientation, orientation_score
+from .prepared import REFINE_K, PreparedShape, as_meshes, pair_shapes, pair_spectrum, shape_settings
 from .refine import prefetch_bases, refine_map
 from .reorder import REORDER_MODES, Configuration, rank_configurations
 from .result import Correspondence
+from .selection import MapCandidate, choose_map, score_candidates
 from .symmetry import (SYMMETRY_MODES, WIDE_CANDIDATES, Candidate, candidate_ranks, choose, metric_distortion,
                        right_map_missing)
 from .timing import StageProgress, StageTimer
 from .tps import mean_pairwise_distance
 
-#: Laplace-Beltrami basis size of the ZoomOut refinement (see :mod:`meshcorr.refine`).
-REFINE_K = 40
 #: Geodesic rows sampled on the source for the metric distortion of a candidate
 #: (measured only when the orientation is unreliable).
 N_DISTORTION_SOURCES = 16
 ANCHOR_SCALES = ("embedding", "geodesic")
+#: Default of a renamed keyword: passing it raises a ParameterError naming the new one.
+_RENAMED = object()
 
 
-def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "heat",
+def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *, k: int = 6,
+          geodesic: str = "heat",
           scale_eigenvalues: bool = True, reorder: str = "exhaustive", icp_iterations: int = 10,
           n_control: int = 500, anneal: float = 0.5, n_anchors: int = 3, anchor_weight: float = 1.0,
           bijective: bool = False, largest_component: bool = False, random_state: int | None = 0,
-          progress: StageProgress | None = None, mode: str = "auto", n_landmarks: int = N_LANDMARKS,
+          progress: StageProgress | None = None, mode: str = "auto", n_samples: int = N_SAMPLES,
           max_memory: int | str | None = None, scalable_above: int = SCALABLE_ABOVE,
           method: str = "spectral", prealign: bool = True,
           symmetry: str = "auto", refine: bool = True, refine_k: int = REFINE_K,
-          anchor_scale: str = "embedding") -> Correspondence:
+          anchor_scale: str = "embedding", landmarks=None, extremities: bool = True,
+          n_landmarks=_RENAMED) -> Correspondence:
     """Dense vertex correspondence from ``source`` to ``target``.
 
     Parameters
     ----------
-    source, target : path, trimesh.Trimesh, Mesh or (vertices, faces)
+    source, target : path, trimesh.Trimesh, Mesh, (vertices, faces) or PreparedShape
         Triangle meshes: closed or open 2-manifolds, one connected component
         each (see ``largest_component``). Any pose, position, rotation,
-        uniform scale and vertex count.
+        uniform scale and vertex count. A shape from :func:`meshcorr.prepare`
+        skips the per-shape work and gives the same map as its mesh; it must
+        have been prepared with this call's ``k``, ``geodesic``,
+        ``scale_eigenvalues``, ``n_samples``, ``refine``, ``refine_k``,
+        ``largest_component``, ``random_state`` and the pair's mode.
     k : int
         Eigenpairs computed; the embedding has ``k - 1`` dimensions (paper: 6).
     geodesic : {"heat", "fmm", "exact", "dijkstra"}
@@ -97,8 +106,9 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
         Nyström extension (``O(n m)``); "auto": dense up to
         ``scalable_above`` vertices if it fits in ``max_memory``, else
         scalable (see :mod:`meshcorr.modes`).
-    n_landmarks : int
-        m, landmark vertices of the scalable mode.
+    n_samples : int
+        m, Nyström samples (landmark vertices) of the scalable mode
+        (formerly ``n_landmarks``, which now raises :class:`ParameterError`).
     max_memory : int or str, optional
         Bytes (or a size such as ``"4GiB"``) the dense mode may use; it
         refuses larger inputs. Default: 80 % of the memory available now.
@@ -126,6 +136,16 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
         normalised geodesic distance)), so it is commensurate with the
         embedding term; "geodesic": geodesics divided by the largest one,
         as in ALGORITHM.md step 6.
+    landmarks : sequence of (source_index, target_index), optional
+        Vertices the user knows to correspond (0-based, input numbering).
+        They start a candidate map of their own, decide among the candidate
+        maps (the one that agrees with them wins: this settles the left/right
+        choice) and are mapped exactly (:mod:`meshcorr.selection`).
+    extremities : bool
+        Also try maps started from matched shape extremities
+        (:mod:`meshcorr.extremities`) and keep the map the whole-map energies
+        prefer (:mod:`meshcorr.selection`); needed when the shapes'
+        proportions differ. Used with ``symmetry="auto"``.
 
     Returns
     -------
@@ -136,30 +156,30 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
 
     if check_choice("method", method, tuple(METHODS)) != "spectral":
         common = dict(k=k, geodesic=geodesic, bijective=bijective, largest_component=largest_component)
+        source, target = as_meshes(source, target)
         return run_method(method, source, target, prealign=prealign, random_state=random_state,
                           progress=progress, **applicable_options(method, common))
 
-    k = check_int("k", k, minimum=2, maximum=10)
-    check_choice("geodesic", geodesic, GEODESIC_METHODS)
+    if n_landmarks is not _RENAMED:
+        raise ParameterError(f"n_landmarks was renamed n_samples (the Nyström sample count of the scalable "
+                             f"mode): pass n_samples={n_landmarks!r} instead.")
+    settings = shape_settings(k=k, geodesic=geodesic, scale_eigenvalues=scale_eigenvalues, n_samples=n_samples,
+                              refine=refine, refine_k=refine_k, largest_component=largest_component,
+                              random_state=random_state)
+    k, n_samples, refine_k = settings["k"], settings["n_samples"], settings["refine_k"]
     check_choice("reorder", reorder, REORDER_MODES)
     n_anchors = check_int("n_anchors", n_anchors, minimum=0)
     anchor_weight = check_float("anchor_weight", anchor_weight, minimum=0.0)
     check_choice("mode", mode, MODES)
-    n_landmarks = check_int("n_landmarks", n_landmarks, minimum=k + 1)
     max_memory = resolve_memory(max_memory)
     check_choice("symmetry", symmetry, SYMMETRY_MODES)
     check_choice("anchor_scale", anchor_scale, ANCHOR_SCALES)
-    if not isinstance(refine, (bool, np.bool_)):
-        raise ParameterError(f"The 'refine' parameter must be True or False. Got {refine!r} instead.")
-    refine_k = check_int("refine_k", refine_k, minimum=2)
     timer = StageTimer(progress)
 
-    with timer.stage("load"):
-        why = f"The spectral embedding with k={k} needs at least {k + 2} vertices."
-        src = as_mesh(source, name="source", largest_component=largest_component,
-                      min_vertices=k + 2, reason=why)
-        tgt = as_mesh(target, name="target", largest_component=largest_component,
-                      min_vertices=k + 2, reason=why)
+    with timer.stage("load"):  # meshes, or shapes prepared with these settings (meshcorr.prepared)
+        shapes = pair_shapes(source, target, settings)
+        src, tgt = as_meshes(*shapes)
+        pairs = check_landmarks(landmarks, src, tgt)
 
     mode = select_mode(mode, src.n_vertices, tgt.n_vertices, max_memory=max_memory,
                        scalable_above=scalable_above, bijective=bijective)
@@ -167,9 +187,7 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
     # thread computes them while steps 1-7 run (meshcorr.refine.prefetch_bases).
     with prefetch_bases(src, tgt, refine_k, random_state=random_state, enabled=refine) as bases:
         # Steps 1-3: geodesic distances, Gaussian affinities, scaled spectral embedding.
-        spectra = [build_spectrum(mesh, mode, k=k, geodesic=geodesic, scale=scale_eigenvalues,
-                                  n_landmarks=n_landmarks, random_state=random_state, timer=timer)
-                   for mesh in (src, tgt)]
+        spectra = [pair_spectrum(shape, settings, mode, timer) for shape in shapes]
         X, Y = spectra[0].embedding, spectra[1].embedding
 
         # Step 4: eigenvector reordering and sign correction.
@@ -203,26 +221,36 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
         with timer.stage("refine"):
             chosen.mapping, refine_history = refine_map(src, tgt, chosen.mapping, k=refine_k,
                                                         bijective=bijective, random_state=random_state)
+    # Whole-map choice: the spectral map against maps from matched extremities
+    # and from the user's landmarks, each refined alike (meshcorr.selection).
+    local_map, other_map, map_candidates = chosen.mapping, None if other is None else other.mapping, []
+    if symmetry == "auto" and (extremities or pairs is not None):
+        with timer.stage("whole-map"):
+            local_map, other_map, map_candidates = _whole_map_choice(
+                src, tgt, spectra, chosen.mapping, other_map, pairs, extremities=extremities, refine=refine,
+                refine_k=refine_k, bijective=bijective, reliable=reliable, random_state=random_state)
     icp, anchors = chosen.extra["icp"], chosen.extra["anchors"]
-    local_map, local_cost = chosen.mapping, chosen.extra["cost"]
+    local_cost = chosen.extra["cost"] if local_map is chosen.mapping else None
 
     full_map = np.full(src.n_original, -1, dtype=np.int64)
     full_map[src.kept] = tgt.kept[local_map]
     full_cost = np.full(src.n_original, np.nan)
-    if not refine:
+    if not refine and local_cost is not None:
         full_cost[src.kept] = local_cost
     alternative_map = None
-    if other is not None:
+    if other_map is not None:
         alternative_map = np.full(src.n_original, -1, dtype=np.int64)
-        alternative_map[src.kept] = tgt.kept[other.mapping]
+        alternative_map[src.kept] = tgt.kept[other_map]
     summaries = [dict(c.to_dict(), chosen=c is chosen, alternative=c is other) for c in candidates]
     Y_configured = chosen.configuration.apply(Y)
     params = dict(k=k, geodesic=geodesic, scale_eigenvalues=scale_eigenvalues, reorder=reorder,
                   icp_iterations=icp_iterations, n_control=n_control, anneal=anneal,
                   n_anchors=n_anchors, anchor_weight=anchor_weight, bijective=bijective,
                   largest_component=largest_component, random_state=random_state, mode=mode,
-                  n_landmarks=n_landmarks, max_memory=max_memory, symmetry=symmetry, refine=refine,
-                  refine_k=refine_k, anchor_scale=anchor_scale)
+                  n_samples=n_samples, max_memory=max_memory, symmetry=symmetry, refine=refine,
+                  refine_k=refine_k, anchor_scale=anchor_scale, extremities=extremities,
+                  landmarks=None if pairs is None else np.stack([src.kept[pairs[:, 0]], tgt.kept[pairs[:, 1]]],
+                                                                axis=1).tolist())
     return Correspondence(
         map=full_map, cost=full_cost, source_vertices=src.kept.copy(), target_vertices=tgt.kept.copy(),
         source_embedding=X, target_embedding=Y_configured, aligned_target_embedding=icp.warped,
@@ -232,8 +260,43 @@ def match(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "he
         icp_history=icp.history, icp_converged=icp.converged, timings=timer.timings,
         background_timings={} if bases.seconds is None else {"refine_bases": bases.seconds}, params=params,
         candidates=summaries, alternative_map=alternative_map, orientation_reliable=reliable,
-        refine_history=refine_history,
+        refine_history=refine_history, map_candidates=map_candidates,
     )
+
+
+def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, spectral_other,
+                      pairs: np.ndarray | None, *, extremities: bool, refine: bool, refine_k: int,
+                      bijective: bool, reliable: bool, random_state):
+    """Candidate maps from extremities and landmarks, scored with the spectral map; the winner.
+
+    Returns the chosen local map, the alternative (the least distorted map of
+    the other orientation, else the spectral alternative) and every candidate's scores.
+    """
+    g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
+    starts: list[tuple[str, np.ndarray, dict]] = []
+    if pairs is not None:
+        starts.append(("landmarks", landmark_map(g1, g2, pairs), {}))
+    if extremities:
+        tips = [find_extremities(mesh, spectrum.geodesics_from, length_unit=spectrum.max_geodesic,
+                                 random_state=random_state) for mesh, spectrum in zip((src, tgt), spectra)]
+        for rank, (energy, assignment) in enumerate(match_extremities(*tips)):
+            starts.append((f"extremities-{rank}", landmark_map(g1, g2, assignment),
+                           {"extremity_energy": energy}))
+    candidates = [MapCandidate("spectral", spectral_map)]
+    if spectral_other is not None:  # unrefined: it is kept as the alternative, rarely chosen
+        candidates.append(MapCandidate("spectral-alternative", spectral_other))
+    for origin, start, extra in starts:
+        mapping = (refine_map(src, tgt, start, k=refine_k, bijective=bijective, random_state=random_state)[0]
+                   if refine else start)
+        candidates.append(MapCandidate(origin, mapping, extra=extra))
+    score_candidates(candidates, src, tgt, g1, g2, reliable=reliable, landmarks=pairs, random_state=random_state)
+    chosen, alternative = choose_map(candidates, reliable=reliable)
+    mapping = chosen.mapping.copy()
+    if pairs is not None:
+        mapping[pairs[:, 0]] = pairs[:, 1]
+    other = alternative.mapping if alternative is not None else spectral_other
+    summaries = [dict(c.to_dict(), chosen=c is chosen, alternative=c is alternative) for c in candidates]
+    return mapping, other, summaries
 
 
 def _chosen_first(configurations: list[Configuration], chosen: Candidate,

@@ -72,6 +72,13 @@ class Correspondence:
         scores mean something (see :mod:`meshcorr.orientation`).
     refine_history : list of dict
         Per ZoomOut iteration (:mod:`meshcorr.refine`): basis size, fraction changed.
+    map_candidates : list of dict
+        The complete maps judged by the whole-map choice
+        (:mod:`meshcorr.selection`): origin ("spectral", "extremities-r",
+        "landmarks"), orientation, distortion, regional orientation, landmark
+        error, and ``chosen`` / ``alternative`` flags. Empty when that stage
+        did not run (``symmetry="cost"`` or ``"mirror"``, ``extremities=False``
+        without landmarks).
     """
 
     map: np.ndarray
@@ -95,6 +102,7 @@ class Correspondence:
     alternative_map: np.ndarray | None = None
     orientation_reliable: bool | None = None
     refine_history: list = field(default_factory=list)
+    map_candidates: list[dict] = field(default_factory=list)
 
     @property
     def runner_up(self) -> Configuration | None:
@@ -111,6 +119,7 @@ class Correspondence:
             "n_mapped": int(mapped.sum()),
             "n_target_hit": int(len(np.unique(self.map[mapped]))),
             "configuration": self.configuration.to_dict() if self.configuration else None,
+            "map_candidates": self.map_candidates,
             "runner_up": self.runner_up.to_dict() if self.runner_up else None,
             "n_configurations": len(self.alternatives),
             "eigenvalues": {k: [float(x) for x in v] for k, v in self.eigenvalues.items()},

@@ -9,7 +9,7 @@ for large meshes) only need to return the same object.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
@@ -34,12 +34,20 @@ class Spectrum:
         to every vertex, ``(n,)``, divided by ``max_geodesic``.
     max_geodesic : float
         The largest geodesic distance on the mesh (the Gaussian width).
+    mode : {"dense", "scalable"}
+        The builder that made it (:mod:`meshcorr.modes`).
+    rows : dict
+        Scalable mode: the unnormalised geodesic rows computed so far
+        (vertex -> ``(n,)``), which ``geodesics_from`` serves; empty in the
+        dense mode, whose rows are those of ``mesh.geodesic_matrix``.
     """
 
     eigenvalues: np.ndarray
     embedding: np.ndarray
     geodesics_from: Callable[[int], np.ndarray]
     max_geodesic: float
+    mode: str = "dense"
+    rows: dict = field(default_factory=dict)
 
 
 def dense_spectrum(mesh: Mesh, *, k: int, geodesic: str, scale: bool, random_state: int | None,
@@ -65,4 +73,9 @@ def dense_spectrum(mesh: Mesh, *, k: int, geodesic: str, scale: bool, random_sta
         sigma = float(D.max())
         values, embedding = spectral_embedding(gaussian_affinity(D, sigma), k, scale=scale,
                                                random_state=random_state)
-    return Spectrum(values, embedding, lambda i: D[i] / sigma, sigma)
+    return Spectrum(values, embedding, dense_rows(D, sigma), sigma, mode="dense")
+
+
+def dense_rows(D: np.ndarray, sigma: float) -> Callable[[int], np.ndarray]:
+    """``geodesics_from(i)`` of the dense mode: row i of ``D`` ``(n, n)`` divided by ``sigma``."""
+    return lambda i: D[i] / sigma

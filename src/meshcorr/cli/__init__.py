@@ -15,7 +15,9 @@ from contextlib import contextmanager
 
 from .. import __version__
 from ..errors import InputError, MeshcorrError, MeshError, MeshWarning
+from . import batch as _batch
 from . import bench as _bench
+from . import cache as _cache
 from . import embed as _embed
 from . import evaluate as _evaluate
 from . import match as _match
@@ -24,14 +26,14 @@ from . import transfer as _transfer
 from ._signals import interrupt_once
 
 #: Sub-command modules, in the order ``--help`` lists them.
-COMMANDS = [_match, _evaluate, _bench, _show, _transfer, _embed]
+COMMANDS = [_match, _evaluate, _bench, _show, _transfer, _embed, _batch, _cache]
 
 #: Exit codes, listed in ``--help`` and the README.
 EXIT_OK = 0
 EXIT_ERROR = 1  # an internal error or out of memory
 EXIT_USAGE = 2  # bad usage: an unknown flag, a bad option value, an output that cannot be written
 EXIT_INPUT = 3  # bad input data: a mesh, map or ground-truth file that cannot be used
-EXIT_FAILED_RUNS = 4  # 'bench': some runs failed (recorded in its results)
+EXIT_FAILED_RUNS = 4  # 'bench', 'batch': some runs failed (recorded in their results)
 EXIT_INTERRUPTED = 130  # Ctrl-C (SIGINT); no output file is left behind
 EXIT_BROKEN_PIPE = 141  # stdout closed early (piped into 'head'), as 128 + SIGPIPE
 
@@ -41,7 +43,7 @@ exit codes:
   {EXIT_ERROR}    internal error or out of memory
   {EXIT_USAGE}    bad usage: unknown flag, bad option value, an output that cannot be written
   {EXIT_INPUT}    bad input data: a mesh, map or ground-truth file that cannot be used
-  {EXIT_FAILED_RUNS}    bench: some runs failed
+  {EXIT_FAILED_RUNS}    bench, batch: some runs failed (recorded in their results)
   {EXIT_INTERRUPTED}  interrupted (Ctrl-C); no output file is written
   {EXIT_BROKEN_PIPE}  stdout was closed early (e.g. piped into head)
 """

@@ -10,7 +10,7 @@ import sys
 from ..baselines import METHODS, SPATIAL_METHODS
 from ..errors import ParameterError
 from ..geodesics import GEODESIC_METHODS
-from ..modes import MODES, N_LANDMARKS, SCALABLE_ABOVE
+from ..modes import MODES, N_SAMPLES, SCALABLE_ABOVE
 from ..pipeline import REFINE_K
 from ..reorder import REORDER_MODES
 from ._progress import StageProgress
@@ -102,8 +102,9 @@ def add_parser(sub) -> None:
                    help="dense: all-pairs geodesics and exact eigenpairs (n x n memory, the reference); "
                         f"scalable: landmark geodesics and the Nystrom extension; auto: dense up to "
                         f"{SCALABLE_ABOVE} vertices if it fits in --max-memory, else scalable (default: auto)")
-    s.add_argument("--landmarks", type=int, default=N_LANDMARKS, dest="n_landmarks", metavar="N",
-                   help=f"landmark vertices of the scalable mode (default: {N_LANDMARKS})")
+    s.add_argument("--samples", type=int, default=N_SAMPLES, dest="n_samples", metavar="N",
+                   help=f"Nystrom samples (landmark vertices) of the scalable mode (default: {N_SAMPLES})")
+    s.add_argument("--landmarks", metavar="FILE", dest="landmarks_file", help=argparse.SUPPRESS)
     s.add_argument("--scalable-above", type=int, default=SCALABLE_ABOVE, metavar="N",
                    help=f"--mode auto: the scalable mode from this many vertices on (default: {SCALABLE_ABOVE})")
     s.add_argument("--max-memory", metavar="SIZE", default=None,
@@ -153,6 +154,12 @@ def run(args) -> int:
     from .. import match
     from ..io import check_outputs, staged_writes, write_map
 
+    if args.landmarks_file is not None:
+        if args.landmarks_file.strip().isdigit():
+            raise ParameterError(f"--landmarks N was renamed --samples N (the Nystrom sample count of the "
+                                 f"scalable mode): use --samples {args.landmarks_file.strip()}.")
+        raise ParameterError("--landmarks FILE (user landmark pairs) is not supported yet; for the Nystrom "
+                             "sample count use --samples N.")
     if args.output is None and not args.json:
         raise ParameterError("Give -o MAP for the map (or -o - for stdout), or --json for the summary only.")
     if args.output == "-" and args.json:
@@ -175,7 +182,7 @@ def run(args) -> int:
                    progress=progress_for(args, f"{os.path.basename(args.source)} -> "
                                                f"{os.path.basename(args.target)}"),
                    method=args.method, prealign=args.prealign, mode=args.mode,
-                   n_landmarks=args.n_landmarks, max_memory=args.max_memory,
+                   n_samples=args.n_samples, max_memory=args.max_memory,
                    scalable_above=args.scalable_above, refine_k=args.refine_k)
     if args.alternative_out and result.alternative_map is None:
         raise ParameterError(f"No alternative map to write to {args.alternative_out}: only the spectral "

@@ -1,0 +1,309 @@
+"""Right maps on data nobody tuned for (issue 12): flips, partial swaps, non-isometric pairs.
+
+One command scores ``meshcorr.match`` (default settings) and pyFM's automatic
+pipeline on the same pairs of several sets, per set and pooled:
+
+- ``tosca5k``: within-class TOSCA pairs (a class-stratified sample of
+  ``test_pairs.txt``), 5000 template points;
+- ``tosca-noniso``: the gorilla -> man / woman pairs, 900 landmarks; and the
+  same pairs again with 5 landmark pairs taken from the truth
+  (``tosca-noniso+5``: farthest-point spread over the truth's points, given to
+  meshcorr as ``landmarks=`` and to pyFM as its ``landmarks``);
+- ``shrec07-human`` and ``shrec07-fourleg``: raw SHREC'07 models within each
+  class, scored at the hand-picked feature points (mirrored truth from the
+  ``*.sym.info`` left/right pairs);
+- ``cat-lion``: Sumner's cat reference -> lion reference at the 55 markers.
+
+Per pair: the mean geodesic error on the target (divided by sqrt(target
+area)) with flips counted (the truth only) and forgiven (per point, the
+nearer of the truth and the mirrored truth), and the seconds of the map. Per
+set: the means, the number of **full flips** (the error against the mirrored
+truth is smaller) and of **partial swaps** (neither: the error is more than
+twice the forgiven one, e.g. legs swapped under a right upper body).
+
+Rows are appended to a CSV as they finish, so an interrupted run resumes;
+``--report`` writes the Markdown table. Usage::
+
+    nice -n 10 python benchmarks/robustness.py [--quick] [--methods meshcorr pyfm] \\
+        [--out benchmarks/cache/robustness.csv] [--report benchmarks/RESULTS-robustness-table.md]
+
+Needs ``../shared/data`` beside the repository; exits with a message when it
+is absent. pyFM is optional (``pip install pyfmaps``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import itertools
+import os
+import platform
+import re
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+import meshcorr
+from meshcorr.benchmark import stratified_sample
+from meshcorr.evaluation import GeodesicCache, geodesic_errors
+from meshcorr.mesh import as_mesh
+
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+FIELDS = ["set", "source", "target", "method", "mean_error", "forgiven_error", "flipped", "partial",
+          "seconds", "n_points"]
+N_TRUTH_LANDMARKS = 5
+
+
+@dataclass
+class Pair:
+    """One scored pair: mesh paths and the truth (source point k <-> target point k)."""
+
+    set: str
+    source_name: str
+    target_name: str
+    source_path: Path
+    target_path: Path
+    source_points: np.ndarray
+    target_points: np.ndarray
+    target_sym_points: np.ndarray | None
+
+
+def _vts(path: Path) -> np.ndarray:
+    """A 1-based ``.vts`` file as 0-based indices."""
+    return np.loadtxt(path, dtype=np.int64, ndmin=1) - 1
+
+
+def tosca_pairs(root: Path, set_name: str, n_pairs: int | None) -> list[Pair]:
+    """TOSCA-style pairs (``test_pairs.txt``, ``corres/*.vts``, mirrored ``*.sym.vts``)."""
+    listed = [tuple(line.split()) for line in (root / "test_pairs.txt").read_text().splitlines()
+              if len(line.split()) == 2]
+    pairs = stratified_sample(listed, n_pairs, random_state=0)
+    return [Pair(set_name, a, b, root / f"{a}.off", root / f"{b}.off", _vts(root / "corres" / f"{a}.vts"),
+                 _vts(root / "corres" / f"{b}.vts"), _vts(root / "corres" / f"{b}.sym.vts"))
+            for a, b in pairs]
+
+
+def _shrec_points(path: Path) -> np.ndarray:
+    """A SHREC'07 ``Corrs/<id>.vts`` file: a 0-based vertex index and its x y z a line."""
+    return np.array([int(line.split()[0]) for line in path.read_text().splitlines() if line.strip()],
+                    dtype=np.int64)
+
+
+def _shrec_swap(path: Path, n_points: int) -> np.ndarray:
+    """Feature-number permutation swapping the left/right pairs listed in a ``*.sym.info`` file."""
+    order = np.arange(n_points)
+    for line in path.read_text().splitlines():
+        fields = [int(f) for f in line.split()]
+        if len(fields) == 2:
+            order[fields[0]], order[fields[1]] = fields[1], fields[0]
+    return order
+
+
+def shrec_pairs(root: Path, ids: range, sym_info: str, set_name: str, n_pairs: int | None) -> list[Pair]:
+    """All ordered-by-id pairs within one SHREC'07 class, the first ``n_pairs`` of a fixed shuffle."""
+    combos = list(itertools.combinations(ids, 2))
+    if n_pairs is not None and n_pairs < len(combos):
+        order = np.random.default_rng(0).permutation(len(combos))[:n_pairs]
+        combos = [combos[i] for i in sorted(order)]
+    pairs = []
+    for a, b in combos:
+        pa, pb = _shrec_points(root / "Corrs" / f"{a}.vts"), _shrec_points(root / "Corrs" / f"{b}.vts")
+        swap = _shrec_swap(root / "Corrs" / sym_info, len(pb))
+        pairs.append(Pair(set_name, str(a), str(b), root / "Meshes" / f"{a}.off", root / "Meshes" / f"{b}.off",
+                          pa, pb, pb[swap]))
+    return pairs
+
+
+def cat_lion_pair(root: Path) -> list[Pair]:
+    """Sumner cat reference -> lion reference at the 55 hand-placed markers."""
+    text = (root / "markers-cat-lion.yml").read_text()
+    rows = re.findall(r'"(\d+):(\d+)"\s*(?:#(.*))?', text)
+    cat = np.array([int(r[0]) for r in rows], dtype=np.int64)
+    lion = np.array([int(r[1]) for r in rows], dtype=np.int64)
+    notes = [r[2].strip().lower() for r in rows]
+    # Mirrored truth: the marker whose note swaps "left" and "right" (itself when there is none).
+    swapped = [re.sub(r"\b(left|right)\b", lambda m: {"left": "right", "right": "left"}[m.group(1)], n)
+               for n in notes]
+    sym = np.array([lion[notes.index(s)] if s in notes else lion[i] for i, s in enumerate(swapped)])
+    return [Pair("cat-lion", "cat-reference", "lion-reference", root / "cat-poses" / "cat-reference.obj",
+                 root / "lion-poses" / "lion-reference.obj", cat, lion, sym)]
+
+
+def build_sets(quick: bool) -> dict[str, list[Pair]]:
+    """The pairs of every set (``quick``: a few pairs of each, for a smoke run)."""
+    scale = (lambda n: min(n, 8)) if quick else (lambda n: n)
+    sets = {
+        "tosca5k": tosca_pairs(DATA / "tosca5k", "tosca5k", scale(80)),
+        "tosca-noniso": tosca_pairs(DATA / "tosca-noniso", "tosca-noniso", scale(30)),
+        "shrec07-human": shrec_pairs(DATA / "shrec07", range(11, 21), "1.sym.info", "shrec07-human", scale(40)),
+        "shrec07-fourleg": shrec_pairs(DATA / "shrec07", range(391, 401), "20.sym.info", "shrec07-fourleg",
+                                       scale(40)),
+        "cat-lion": cat_lion_pair(DATA / "sumner"),
+    }
+    sets["tosca-noniso+5"] = [Pair(**{**p.__dict__, "set": "tosca-noniso+5"}) for p in sets["tosca-noniso"]]
+    return sets
+
+
+def truth_landmarks(pair: Pair, source, count: int = N_TRUTH_LANDMARKS) -> np.ndarray:
+    """``count`` truth pairs spread over the source by farthest-point sampling (Euclidean, seeded)."""
+    points = np.asarray(source.vertices)[pair.source_points]
+    chosen = [0]
+    distance = np.linalg.norm(points - points[0], axis=1)
+    for _ in range(count - 1):
+        chosen.append(int(np.argmax(distance)))
+        distance = np.minimum(distance, np.linalg.norm(points - points[chosen[-1]], axis=1))
+    return np.stack([pair.source_points[chosen], pair.target_points[chosen]], axis=1)
+
+
+def pyfm_map(source, target, landmarks: np.ndarray | None = None) -> np.ndarray:
+    """pyFM's automatic pipeline (WKS + orientation term + ZoomOut, as in its example), source -> target."""
+    from pyFM.functional import FunctionalMapping
+    from pyFM.mesh import TriMesh
+
+    # pyFM's p2p_21 maps mesh 2's vertices to mesh 1's: mesh 2 is our source.
+    mesh1 = TriMesh(np.array(target.vertices), np.array(target.faces), area_normalize=True)
+    mesh2 = TriMesh(np.array(source.vertices), np.array(source.faces), area_normalize=True)
+    model = FunctionalMapping(mesh1, mesh2)
+    process = dict(n_descr=100, descr_type="WKS", k_process=120, subsample_step=5)
+    if landmarks is not None:
+        process["landmarks"] = np.asarray(landmarks)[:, ::-1]  # pyFM: (mesh1 vertex, mesh2 vertex)
+    model.preprocess(**process)
+    model.fit(K=(30, 30), w_descr=1e0, w_lap=1e-2, w_dcomm=1e-1, w_orient=0.1)
+    fm = model.zoomout_refine(nit=15, step=5, subsample=1000)
+    return np.asarray(model.get_p2p(fm), dtype=np.int64)
+
+
+def score(pair: Pair, target, mapping: np.ndarray, cache: GeodesicCache) -> dict:
+    """Flips-counted and forgiven errors of one map at the pair's truth points."""
+    predicted = mapping[pair.source_points]
+    errors = geodesic_errors(target, predicted, pair.target_points, cache=cache)
+    row = {"mean_error": float(errors.mean()), "n_points": len(errors)}
+    if pair.target_sym_points is None:
+        return {**row, "forgiven_error": row["mean_error"], "flipped": 0, "partial": 0}
+    sym = geodesic_errors(target, predicted, pair.target_sym_points, cache=cache)
+    forgiven = float(np.minimum(errors, sym).mean())
+    flipped = sym.mean() < errors.mean()
+    partial = (not flipped) and row["mean_error"] > 2 * forgiven and row["mean_error"] > 0.05
+    return {**row, "forgiven_error": forgiven, "flipped": int(flipped), "partial": int(partial)}
+
+
+def run_pair(pair: Pair, methods: list[str]) -> list[dict]:
+    source = as_mesh(pair.source_path, name=pair.source_name)
+    target = as_mesh(pair.target_path, name=pair.target_name)
+    landmarks = truth_landmarks(pair, source) if pair.set.endswith("+5") else None
+    cache = GeodesicCache("heat")
+    rows = []
+    for method in methods:
+        start = time.perf_counter()
+        if method == "meshcorr":
+            extra = {} if landmarks is None else {"landmarks": landmarks}
+            mapping = meshcorr.match(source, target, **extra).map
+        else:
+            mapping = pyfm_map(source, target, landmarks)
+        seconds = time.perf_counter() - start
+        rows.append(dict(set=pair.set, source=pair.source_name, target=pair.target_name, method=method,
+                         seconds=round(seconds, 3), **score(pair, target, mapping, cache)))
+    return rows
+
+
+def _spread(pairs: list[Pair], count: int) -> list[Pair]:
+    """``count`` pairs spread evenly over the list (all of them for 0 or more than there are)."""
+    if count <= 0 or count >= len(pairs):
+        return list(pairs)
+    return [pairs[i] for i in np.linspace(0, len(pairs) - 1, count).round().astype(int)]
+
+
+def with_paired_subset(rows: list[dict]) -> list[dict]:
+    """Rows plus meshcorr's rows again as ``meshcorr@pyfm-pairs`` on the pairs pyFM ran on."""
+    on_pyfm = {(r["set"], r["source"], r["target"]) for r in rows if r["method"] == "pyfm"}
+    extra = [{**r, "method": "meshcorr@pyfm-pairs"} for r in rows
+             if r["method"] == "meshcorr" and (r["set"], r["source"], r["target"]) in on_pyfm]
+    return rows + extra
+
+
+def summarize(rows: list[dict]) -> list[dict]:
+    """Per set and method, and pooled over all sets: means, flips, partial swaps, seconds."""
+    table = []
+    keys = sorted({(r["set"], r["method"]) for r in rows})
+    for set_name in list(dict.fromkeys(k[0] for k in keys)) + ["all"]:
+        for method in sorted({k[1] for k in keys}):
+            sel = [r for r in rows if r["method"] == method and (set_name == "all" or r["set"] == set_name)]
+            if not sel:
+                continue
+            table.append(dict(set=set_name, method=method, pairs=len(sel),
+                              mean=np.mean([float(r["mean_error"]) for r in sel]),
+                              forgiven=np.mean([float(r["forgiven_error"]) for r in sel]),
+                              flips=sum(int(r["flipped"]) for r in sel),
+                              partial=sum(int(r["partial"]) for r in sel),
+                              seconds=np.median([float(r["seconds"]) for r in sel])))
+    return table
+
+
+def markdown(table: list[dict]) -> str:
+    lines = ["| set | method | pairs | mean error (flips counted) | forgiving flips | full flips | "
+             "partial swaps | median s/pair |", "|---|---|---|---|---|---|---|---|"]
+    for t in table:
+        lines.append(f"| {t['set']} | {t['method']} | {t['pairs']} | {t['mean']:.4f} | {t['forgiven']:.4f} | "
+                     f"{t['flips']} | {t['partial']} | {t['seconds']:.2f} |")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--methods", nargs="+", default=["meshcorr", "pyfm"], choices=["meshcorr", "pyfm"])
+    parser.add_argument("--sets", nargs="+", default=None, help="subset of the set names")
+    parser.add_argument("--quick", action="store_true", help="at most 8 pairs per set")
+    parser.add_argument("--pyfm-pairs", type=int, default=12,
+                        help="pyFM on this many pairs of each set, spread evenly (it takes ~10x longer); "
+                             "0: all")
+    parser.add_argument("--out", type=Path, default=Path("benchmarks/cache/robustness.csv"))
+    parser.add_argument("--report", type=Path, default=None, help="write the Markdown table here")
+    args = parser.parse_args(argv)
+    if not DATA.is_dir():
+        print(f"robustness: {DATA} is absent; this benchmark needs ../shared/data. Skipping.", file=sys.stderr)
+        return 0
+    sets = build_sets(args.quick)
+    chosen = args.sets or list(sets)
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    done = set()
+    rows: list[dict] = []
+    if args.out.is_file():
+        with args.out.open() as handle:
+            rows = list(csv.DictReader(handle))
+        done = {(r["set"], r["source"], r["target"], r["method"]) for r in rows}
+    new_file = not args.out.is_file()
+    with args.out.open("a", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=FIELDS)
+        if new_file:
+            writer.writeheader()
+        for name in chosen:
+            subset = _spread(sets[name], args.pyfm_pairs)
+            for pair in sets[name]:
+                todo = [m for m in args.methods if (name, pair.source_name, pair.target_name, m) not in done
+                        and (m != "pyfm" or any(pair is q for q in subset))]
+                if not todo:
+                    continue
+                for row in run_pair(pair, todo):
+                    writer.writerow(row)
+                    handle.flush()
+                    rows.append(row)
+                    print(f"{name} {pair.source_name}->{pair.target_name} {row['method']}: "
+                          f"{row['mean_error']:.4f} (forgiven {row['forgiven_error']:.4f}"
+                          f"{', FLIP' if row['flipped'] else ''}{', PARTIAL' if row['partial'] else ''}) "
+                          f"{row['seconds']:.1f} s", file=sys.stderr, flush=True)
+    rows = [r for r in rows if r["set"] in chosen and r["method"] in args.methods]
+    text = markdown(summarize(with_paired_subset(rows)))
+    header = (f"Command: `python benchmarks/robustness.py {' '.join(argv or sys.argv[1:])}`; "
+              f"{platform.node()}, {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+              f"{time.strftime('%Y-%m-%d')}, meshcorr {getattr(meshcorr, '__version__', '?')}.\n\n")
+    print(header + text)
+    if args.report is not None:
+        args.report.write_text(header + text + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,162 @@
+"""``meshcorr batch``: map many pairs, each shape prepared once, on a local or remote Dask cluster."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from ..geodesics import GEODESIC_METHODS
+from ..modes import MODES, N_SAMPLES
+
+HELP = "map many pairs (a list, all pairs of a collection, or onto a template) on Dask (resumable)"
+
+DESCRIPTION = """\
+Map every pair with the spectral method, each shape prepared once (its
+embedding, orientation, curvature and refinement basis), as a Dask graph: one
+task per shape, one per pair. By default a local cluster of one worker process
+per core is started and stopped; --scheduler tcp://HOST:PORT runs the same
+graph on an existing Dask cluster (its workers must see the mesh files and
+--out at the same paths). Needs meshcorr[dask].
+
+Pairs: --pairs FILE (one "SOURCE TARGET" a line), --all-pairs SHAPES... (every
+ordered pair, n(n-1) maps) or --template T SHAPES... (T onto each shape: every
+map is indexed by T's vertices).
+
+--out DIR receives maps/SOURCE__TARGET.txt (line i: the TARGET vertex of SOURCE
+vertex i) as each pair finishes, summary.json and summary.csv (per pair:
+status, seconds, the error with --gt) and run.json (the settings). A rerun
+with the same --out skips the pairs done; a failed pair (e.g. a bad mesh) is
+recorded and the others go on. Exit code: 0 if every pair was mapped, 4 if
+any failed. With --all-pairs, --consistency also reports the cycle-consistency
+error and writes maps made consistent through the collection (see
+meshcorr.consistency).
+"""
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("batch", help=HELP, description=DESCRIPTION,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    which = p.add_mutually_exclusive_group(required=True)
+    which.add_argument("--pairs", metavar="PAIRS.txt", help='file of "SOURCE TARGET" lines')
+    which.add_argument("--all-pairs", nargs="+", metavar="SHAPE", help="every ordered pair of these meshes")
+    which.add_argument("--template", metavar="T", help="map T onto each of the SHAPES")
+    p.add_argument("shapes", nargs="*", metavar="SHAPES", help="the meshes of --template")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder (created if missing)")
+    p.add_argument("--gt", metavar="identity|DIR",
+                   help="score each map: 'identity' (same vertex order) or a folder of SHAPE.vts files")
+    p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
+                   help="an existing Dask scheduler (default: a local cluster started here)")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="worker processes of the local cluster (default: one per core)")
+    p.add_argument("--cache", metavar="DIR", nargs="?", const=True, default=None,
+                   help="keep prepared shapes in this on-disk cache (no DIR: the default cache, "
+                        "see 'meshcorr cache info')")
+    p.add_argument("--consistency", action="store_true",
+                   help="with --all-pairs: cycle-consistency error and consistent maps (consistent/)")
+    g = p.add_argument_group("method options (as in 'meshcorr match')")
+    g.add_argument("-k", type=int, default=6, help="eigenpairs (default: 6)")
+    g.add_argument("--geodesic", choices=GEODESIC_METHODS, default="heat", help="geodesic solver (default: heat)")
+    g.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    g.add_argument("--refine", action=argparse.BooleanOptionalAction, default=True,
+                   help="ZoomOut refinement (default: on)")
+    g.add_argument("--mode", choices=MODES, default="auto", help="dense, scalable or auto (default: auto)")
+    g.add_argument("--samples", type=int, default=N_SAMPLES, metavar="N",
+                   help=f"Nystrom samples of the scalable mode (default: {N_SAMPLES})")
+    g.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="any other option of meshcorr.match, e.g. --set symmetry=cost (repeatable)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    p.set_defaults(run=run)
+
+
+def _pairs(args) -> list[tuple[str, str]]:
+    from ..collection import all_pairs, read_pairs, template_pairs
+    from ..errors import ParameterError
+
+    if args.shapes and not args.template:
+        raise ParameterError("Mesh files after the options are the SHAPES of --template T; with --all-pairs "
+                             "list them after --all-pairs, with --pairs put them in the file.")
+    if args.consistency and not args.all_pairs:
+        raise ParameterError("--consistency needs --all-pairs (it compares the maps of every ordered pair).")
+    if args.pairs:
+        return read_pairs(args.pairs)
+    if args.all_pairs:
+        return all_pairs(args.all_pairs)
+    return template_pairs(args.template, args.shapes)
+
+
+def _options(items: list[str]) -> dict:
+    from ..errors import ParameterError
+    from .bench import _value
+
+    options = {}
+    for item in items:
+        key, eq, value = item.partition("=")
+        if not eq or not key:
+            raise ParameterError(f"--set takes KEY=VALUE, e.g. symmetry=cost; got {item!r}.")
+        options[key.strip()] = _value(value)
+    return options
+
+
+class BatchBar:
+    """``progress(done, total, failed, seconds_left)`` on stderr: a bar on a terminal, lines otherwise."""
+
+    def __init__(self, stream=None) -> None:
+        self.stream = stream if stream is not None else sys.stderr
+        self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
+        self.start = time.perf_counter()
+
+    def __call__(self, done: int, total: int, failed: int, seconds_left) -> None:
+        width = 24
+        filled = int(width * done / max(total, 1))
+        left = "" if seconds_left is None else f", ~{_duration(seconds_left)} left"
+        text = (f"[batch] [{'#' * filled}{'-' * (width - filled)}] {done}/{total} pairs, {failed} failed, "
+                f"{_duration(time.perf_counter() - self.start)}{left}")
+        if self.tty:
+            self.stream.write("\r\033[K" + text + ("\n" if done == total else ""))
+        else:
+            self.stream.write(text + "\n")
+        self.stream.flush()
+
+
+def _duration(seconds: float) -> str:
+    seconds = int(round(seconds))
+    return f"{seconds // 60}m{seconds % 60:02d}s" if seconds >= 60 else f"{seconds}s"
+
+
+def run(args) -> int:
+    from ..collection import batch
+
+    pairs = _pairs(args)
+    options = dict(_options(args.set), k=args.k, geodesic=args.geodesic, random_state=args.seed,
+                   refine=args.refine, mode=args.mode, n_samples=args.samples)
+    client = None
+    if args.scheduler:
+        from ..collection import connect
+
+        client = connect(args.scheduler)
+    try:
+        records = batch(pairs, args.out, client=client, ground_truth=args.gt, cache=args.cache,
+                        n_workers=args.workers, progress=None if args.quiet else BatchBar(sys.stderr),
+                        **options)
+    finally:
+        if client is not None:
+            client.close()
+    failed = [r for r in records if r["status"] != "ok"]
+    if args.consistency:
+        from ..consistency import consistency_report
+
+        report = consistency_report(args.out, args.all_pairs, records, geodesic=args.geodesic,
+                                    random_state=args.seed)
+        print(f"meshcorr: cycle-consistency error {report['cycle_error']:.4f} (direct maps), "
+              f"{report['consistent_cycle_error']:.4f} (through {report['hub']}); see "
+              f"{report['path']}", file=sys.stderr)
+    if not args.quiet:
+        print(f"meshcorr: {len(records) - len(failed)} of {len(records)} pairs mapped into {args.out}"
+              + (f"; {len(failed)} failed, see the 'error' column of summary.csv" if failed else ""),
+              file=sys.stderr)
+    if failed:
+        from . import EXIT_FAILED_RUNS
+
+        return EXIT_FAILED_RUNS
+    return 0

@@ -1,0 +1,415 @@
+"""Many pairs at once (:func:`meshcorr.batch`): each shape prepared once, one task per pair, on Dask.
+
+:func:`batch` maps a list of (source, target) mesh files. It builds a Dask
+graph with one task per shape preparation (:func:`meshcorr.prepare`) and one
+per pair (:func:`meshcorr.match` of the two prepared shapes), each pair
+depending on the futures of its two shapes: a prepared shape travels to a
+worker once, when Dask first needs it there, not once per pair (it pickles
+as its ``.npz`` file, :meth:`~meshcorr.prepared.PreparedShape.to_bytes`).
+The workers write each map themselves (atomically) and return a small
+record; the caller streams finished pairs (``as_completed``) into
+``summary.json`` and ``summary.csv``, rewritten atomically every
+:data:`SUMMARY_EVERY` seconds and at the end (also when interrupted).
+
+Task keys are derived from the file (path, size, modification time) and the
+settings, so a rerun into the same folder is idempotent: pairs recorded as
+done whose map exists are skipped, the others (failed, or never finished
+because the run was killed) run again. A folder holding results made with
+other settings is refused. A pair that fails (unreadable or unsuitable mesh,
+any error) is a record with ``status="failed"`` and its error; it never
+stops the batch.
+
+Without a ``client``, :func:`batch` starts a
+``dask.distributed.LocalCluster`` (one single-threaded worker process per
+core, BLAS held to one thread in each) and shuts it down at the end; pass a
+``distributed.Client`` connected to any cluster (``dask-scheduler`` and
+``dask-worker`` on several machines, dask-jobqueue) to run the same graph
+there: the workers must see the mesh files and the output folder at the
+same paths. Dask is the optional extra ``meshcorr[dask]``.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import io
+import json
+import logging
+import os
+import time
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from ._threads import single_blas_thread
+from .benchmark import _check_run_settings, _one_line
+from .errors import MeshcorrError, ParameterError
+from .io import atomic_write
+from .modes import SCALABLE_ABOVE
+from .prepared import SHAPE_SETTINGS, PreparedShape, shape_settings
+
+#: ``progress(done, total, failed, seconds_left)``: called after each finished pair
+#: (``seconds_left`` is None until a pair has finished).
+BatchProgress = Callable[[int, int, int, "float | None"], None]
+
+#: Columns of ``summary.csv``.
+FIELDS = ["source", "target", "map", "status", "seconds", "cpu_seconds", "mean_error", "error"]
+#: ``status`` of a pair whose map was written.
+DONE = "ok"
+FAILED = "failed"
+#: Seconds between two rewrites of the summary while pairs finish (and once at the end).
+SUMMARY_EVERY = 1.0
+#: Seconds :func:`connect` waits for a scheduler to answer.
+CONNECT_TIMEOUT = 30
+DASK_MISSING = ("meshcorr batch runs on Dask, which is not installed: pip install \"meshcorr[dask]\" "
+                "(or pip install \"dask[distributed]\").")
+
+
+def read_pairs(path) -> list[tuple[str, str]]:
+    """``(source, target)`` paths from a file of one "SOURCE TARGET" pair a line.
+
+    Blank lines and lines starting with ``#`` are skipped; relative paths are
+    relative to the file's folder.
+
+    Raises
+    ------
+    ParameterError
+        A missing file, or a line without exactly two paths.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise ParameterError(f"The pairs file {path} does not exist.")
+    pairs = []
+    for number, line in enumerate(path.read_text().splitlines(), start=1):
+        words = line.split()
+        if not words or words[0].startswith("#"):
+            continue
+        if len(words) != 2:
+            raise ParameterError(f"{path}, line {number}: expected two mesh paths 'SOURCE TARGET', got "
+                                 f"{line.strip()!r}. Quote nothing; paths with spaces are not supported.")
+        pairs.append(tuple(str(path.parent / w) if not os.path.isabs(w) else w for w in words))
+    if not pairs:
+        raise ParameterError(f"The pairs file {path} lists no pairs.")
+    return pairs
+
+
+def all_pairs(shapes: Sequence[str]) -> list[tuple[str, str]]:
+    """Every ordered pair ``(a, b)``, ``a != b``, of ``shapes``: ``n (n - 1)`` maps."""
+    _check_shapes(shapes, 2)
+    return [(a, b) for a in shapes for b in shapes if a != b]
+
+
+def template_pairs(template: str, shapes: Sequence[str]) -> list[tuple[str, str]]:
+    """``(template, shape)`` for each shape: maps from the template's vertices onto each shape."""
+    _check_shapes(shapes, 1)
+    return [(template, s) for s in shapes if s != template]
+
+
+def _check_shapes(shapes: Sequence[str], minimum: int) -> None:
+    if len(set(shapes)) < minimum or len(set(shapes)) != len(shapes):
+        raise ParameterError(f"Give at least {minimum} distinct mesh files (each once). Got {list(shapes)}.")
+
+
+def map_name(source: str, target: str) -> str:
+    """File name of the map of a pair: ``SOURCESTEM__TARGETSTEM.txt``."""
+    return f"{Path(source).stem}__{Path(target).stem}.txt"
+
+
+def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_truth: str | None = None,
+          cache=None, progress: BatchProgress | None = None, n_workers: int | None = None,
+          **options) -> list[dict]:
+    """Map every pair, writing ``OUT/maps/SOURCE__TARGET.txt`` and a summary as each finishes.
+
+    Parameters
+    ----------
+    pairs : sequence of (str, str)
+        Source and target mesh paths (see :func:`read_pairs`,
+        :func:`all_pairs`, :func:`template_pairs`).
+    out_dir : str or PathLike
+        Created if missing. Holds ``maps/``, ``summary.json``,
+        ``summary.csv`` and ``run.json`` (the settings).
+    client : distributed.Client, optional
+        Run on this cluster; default: a local cluster started and shut down here.
+    ground_truth : str, optional
+        ``"identity"`` (same vertex order) or a folder of ``SHAPESTEM.vts``
+        files (TOSCA's convention): each record then holds the mean
+        geodesic error / sqrt(target area) (:func:`meshcorr.evaluation.evaluate_map`).
+    cache : ShapeCache, path or True, optional
+        Prepared shapes are looked up in and stored to this on-disk cache.
+    progress : callable, optional
+        ``progress(done, total, failed, seconds_left)``.
+    n_workers : int, optional
+        Worker processes of the local cluster (default: one per core).
+    **options
+        Options of :func:`meshcorr.match` for the spectral method (e.g.
+        ``k``, ``random_state``, ``refine``, ``mode``, ``n_samples``); the
+        maps equal those of :func:`meshcorr.match` on each pair.
+
+    Returns
+    -------
+    records : list of dict
+        One per pair, in the order of ``pairs``: ``source``, ``target``,
+        ``map`` (path), ``status`` ("ok" or "failed"), ``seconds`` (the
+        pair's matching time), ``cpu_seconds`` (the CPU time of the worker
+        process meanwhile), ``mean_error`` (with ``ground_truth``),
+        ``error`` (the failure's message).
+
+    Raises
+    ------
+    MeshcorrError
+        Dask is not installed (:data:`DASK_MISSING`).
+    ParameterError
+        Bad options (checked before any work), two pairs writing the same
+        map file, or an output folder holding results of other settings.
+    """
+    distributed = _import_distributed()
+    settings, options = _split_options(options)
+    pairs = [(str(a), str(b)) for a, b in pairs]
+    if not pairs:
+        raise ParameterError("The batch has no pairs: give --pairs FILE, --all-pairs SHAPES or --template T SHAPES.")
+    names = [map_name(a, b) for a, b in pairs]
+    if len(set(names)) != len(names):
+        raise ParameterError("Two pairs would write the same map file (meshes with the same file name in "
+                             "different folders): rename the meshes so that their names are distinct.")
+    if ground_truth is not None and ground_truth != "identity" and not Path(ground_truth).is_dir():
+        raise ParameterError(f"The ground truth must be 'identity' or a folder of SHAPE.vts files. "
+                             f"Got {ground_truth!r}, which is not a folder.")
+    out = Path(out_dir)
+    (out / "maps").mkdir(parents=True, exist_ok=True)
+    cache_root = None if cache is None else str(_cache_root(cache))
+    _check_run_settings(out, {"settings": settings, "options": _jsonable(options)})
+    records = {(r["source"], r["target"]): r for r in _read_summary(out)}
+    todo = [(a, b) for a, b in pairs
+            if not (records.get((a, b), {}).get("status") == DONE and (out / "maps" / map_name(a, b)).is_file())]
+
+    try:
+        with _client(distributed, client, n_workers) as dask_client:
+            shape_keys = {}
+            for path in sorted({p for pair in todo for p in pair}):
+                shape_keys[path] = dask_client.submit(_prepare_task, path, settings, options, cache_root,
+                                                      key=f"prepare-{_task_key(path, settings, options)}")
+            futures = {}
+            for a, b in todo:
+                map_path = str(out / "maps" / map_name(a, b))
+                key = f"match-{_task_key(a + chr(0) + b, settings, options, ground_truth, map_path)}"
+                future = dask_client.submit(_pair_task, shape_keys[a], shape_keys[b], a, b, map_path, settings,
+                                            options, ground_truth, key=key)
+                futures[future] = (a, b, map_path)
+            start, done, failed, written = time.perf_counter(), 0, 0, time.perf_counter()
+            if progress is not None:
+                progress(0, len(todo), 0, None)
+            for future in distributed.as_completed(list(futures)):
+                try:
+                    record = future.result()
+                except Exception as exc:  # noqa: BLE001 - e.g. KilledWorker: the pair crashed its worker
+                    record = dict(_record(*futures[future]), error=_one_line(exc))
+                future.release()
+                records[(record["source"], record["target"])] = record
+                done, failed = done + 1, failed + (record["status"] != DONE)
+                if time.perf_counter() - written > SUMMARY_EVERY:  # a rerun redoes the pairs not yet written
+                    _write_summary(out, [records[p] for p in pairs if p in records])
+                    written = time.perf_counter()
+                if progress is not None:
+                    elapsed = time.perf_counter() - start
+                    progress(done, len(todo), failed, elapsed / done * (len(todo) - done))
+    finally:  # after an interruption too: a rerun skips what is recorded
+        _write_summary(out, [records[p] for p in pairs if p in records])
+    return [records[p] for p in pairs]
+
+
+def _import_distributed():
+    try:
+        import distributed
+    except ImportError:
+        raise MeshcorrError(DASK_MISSING) from None
+    return distributed
+
+
+@contextmanager
+def _client(distributed, client, n_workers: int | None):
+    """The given client, or one of a local cluster of single-threaded worker processes started here."""
+    if client is not None:
+        yield client
+        return
+    workers = n_workers or os.cpu_count() or 1
+    # One process per core, so one thread each: for BLAS, and for the pipeline's own thread pools
+    # (meshcorr._threads; the maps are those of the threaded runs).
+    env = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+                                  "MESHCORR_THREADS")}
+    # silence_logs: Dask's own warnings (e.g. the tasks cancelled by Ctrl-C) are not the user's business.
+    with distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None, env=env, silence_logs=logging.ERROR) as cluster, \
+            distributed.Client(cluster) as local:
+        yield local
+
+
+def _split_options(options: dict) -> tuple[dict, dict]:
+    """The per-shape settings (validated) and the other match options (validated by a dry match)."""
+    from .pipeline import match
+
+    given = dict(options)
+    if "method" in given and given["method"] != "spectral":
+        raise ParameterError("meshcorr batch runs the spectral method only (prepared shapes); "
+                             f"got method={given['method']!r}.")
+    if given.get("landmarks") is not None:
+        raise ParameterError("User landmarks belong to one pair: meshcorr batch does not take them (match "
+                             "such pairs one by one with meshcorr.match(..., landmarks=...)).")
+    shape = {key: given.pop(key, default) for key, default in SHAPE_SETTINGS.items()}
+    settings = shape_settings(**shape)
+    # Every other option is checked before any work: match validates all its options before it
+    # loads the meshes, so a dry call without meshes raises ParameterError for a bad option and
+    # MeshError (no mesh) once they all passed.
+    try:
+        match(None, None, **given, **settings)
+    except ParameterError:
+        raise
+    except MeshcorrError:
+        pass
+    except TypeError as exc:
+        raise ParameterError(f"Unknown option of meshcorr.batch: {exc}.") from None
+    return settings, given
+
+
+def _jsonable(options: dict) -> dict:
+    return {key: (value if isinstance(value, (int, float, str, bool, type(None))) else repr(value))
+            for key, value in sorted(options.items())}
+
+
+def _task_key(text: str, *parts) -> str:
+    """A deterministic key: the file's path, size and modification time (each path in ``text``) and the settings."""
+    stats = []
+    for path in text.split(chr(0)):
+        try:
+            info = os.stat(path)
+            stats.append([os.path.abspath(path), info.st_size, info.st_mtime_ns])
+        except OSError:
+            stats.append([path])
+    payload = json.dumps([stats, [_jsonable(p) if isinstance(p, dict) else p for p in parts]], sort_keys=True)
+    return hashlib.sha256(payload.encode()).hexdigest()[:24]
+
+
+def _cache_root(cache) -> Path:
+    from .cache import as_cache
+
+    return as_cache(cache).root
+
+
+def _prepare_task(path: str, settings: dict, options: dict, cache_root: str | None):
+    """Worker: the :class:`PreparedShape` of one mesh file, or the one-line error that prevents it."""
+    from .prepared import prepare
+
+    try:
+        with single_blas_thread():
+            return prepare(path, mode=options.get("mode", "auto"), max_memory=options.get("max_memory"),
+                           scalable_above=options.get("scalable_above", SCALABLE_ABOVE),
+                           cache=cache_root, **settings)
+    except Exception as exc:  # noqa: BLE001 - a failed shape fails its pairs, never the batch
+        return _one_line(exc)
+
+
+def _pair_task(source, target, source_path: str, target_path: str, map_path: str, settings: dict,
+               options: dict, ground_truth: str | None) -> dict:
+    """Worker: match two prepared shapes, write the map, return the pair's record."""
+    from .io import write_map
+    from .pipeline import match
+
+    record = _record(source_path, target_path, map_path)
+    for shape, path in ((source, source_path), (target, target_path)):
+        if not isinstance(shape, PreparedShape):  # the message of the failed preparation
+            name = Path(path).name
+            record["error"] = shape if name in shape else f"{name}: {shape}"
+            return record
+    try:
+        with single_blas_thread():
+            source, target = _in_pair_mode(source, target, settings, options)
+            start, cpu = time.perf_counter(), time.process_time()
+            result = match(source, target, **options, **settings)
+            record["seconds"] = time.perf_counter() - start
+            record["cpu_seconds"] = time.process_time() - cpu  # the worker's CPU time: load-independent
+            write_map(map_path, result.map)
+            if ground_truth is not None:
+                record["mean_error"] = _mean_error(source, target, result.map, source_path, target_path,
+                                                   ground_truth, settings["geodesic"])
+        record["status"] = DONE
+    except Exception as exc:  # noqa: BLE001 - a failed pair is a record, never the end of the batch
+        record["error"] = _one_line(exc)
+    return record
+
+
+def _record(source_path: str, target_path: str, map_path: str) -> dict:
+    """The record of a pair not (yet) mapped: status "failed", no times, no error message."""
+    return {"source": source_path, "target": target_path, "map": map_path, "status": FAILED, "seconds": None,
+            "cpu_seconds": None, "mean_error": None, "error": ""}
+
+
+def _in_pair_mode(source: PreparedShape, target: PreparedShape, settings: dict, options: dict):
+    """The two shapes prepared in the mode the pair runs in (a shape alone may resolve "auto" otherwise)."""
+    from .modes import resolve_memory, select_mode
+    from .prepared import prepare_mesh
+
+    mode = select_mode(options.get("mode", "auto"), source.n_vertices, target.n_vertices,
+                       max_memory=resolve_memory(options.get("max_memory")),
+                       scalable_above=options.get("scalable_above", SCALABLE_ABOVE),
+                       bijective=options.get("bijective", False))
+    return tuple(shape if shape.settings["mode"] == mode else prepare_mesh(shape.mesh, settings, mode)
+                 for shape in (source, target))
+
+
+def _mean_error(source, target, mapping, source_path, target_path, ground_truth, geodesic) -> float:
+    from .evaluation import evaluate_map
+    from .ground_truth import load_ground_truth
+
+    full_source, full_target = source.mesh.n_original, target.mesh
+    spec = ground_truth if ground_truth == "identity" else [
+        Path(ground_truth) / f"{Path(p).stem}.vts" for p in (source_path, target_path)]
+    truth = load_ground_truth(spec, n_source=full_source, n_target=full_target.n_original)
+    if full_target.n_original != full_target.n_vertices:
+        raise ParameterError("Scoring a map against ground truth needs the whole target mesh "
+                             "(without --largest-component).")
+    return float(evaluate_map(full_target, mapping, truth, geodesic=geodesic)["mean_error"])
+
+
+def _read_summary(out: Path) -> list[dict]:
+    path = out / "summary.json"
+    if not path.is_file():
+        return []
+    try:
+        return list(json.loads(path.read_text())["pairs"])
+    except (ValueError, KeyError, TypeError):
+        raise ParameterError(f"{path} is not a batch summary (damaged?): delete it to run every pair again, "
+                             "or use another --out folder.") from None
+
+
+def _write_summary(out: Path, records: list[dict]) -> None:
+    failed = sum(r["status"] != DONE for r in records)
+    seconds = [r["seconds"] for r in records if r["status"] == DONE and r["seconds"] is not None]
+    payload = json.dumps({"n_pairs": len(records), "n_failed": failed,
+                          "mean_seconds": float(np.mean(seconds)) if seconds else None, "pairs": records},
+                         indent=1).encode()
+    atomic_write(out / "summary.json", lambda file: file.write(payload))
+    buffer = io.StringIO()
+    writer = csv.DictWriter(buffer, fieldnames=FIELDS, lineterminator="\n", extrasaction="ignore")
+    writer.writeheader()
+    for record in records:
+        writer.writerow({key: "" if record.get(key) is None else record[key] for key in FIELDS})
+    text = buffer.getvalue().encode()
+    atomic_write(out / "summary.csv", lambda file: file.write(text))
+
+
+def connect(address: str):
+    """A ``distributed.Client`` of the scheduler at ``address`` (e.g. ``tcp://10.0.0.5:8786``).
+
+    Raises
+    ------
+    MeshcorrError
+        Dask is missing, or no scheduler answers at ``address`` within :data:`CONNECT_TIMEOUT` seconds.
+    """
+    distributed = _import_distributed()
+    try:
+        return distributed.Client(address, timeout=CONNECT_TIMEOUT)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise MeshcorrError(f"No Dask scheduler answered at {address} ({_one_line(exc)}): start one with "
+                            "'dask scheduler' and workers with 'dask worker ADDRESS', or omit --scheduler "
+                            "to use a local cluster.") from None

@@ -1,0 +1,163 @@
+"""Consistency of the maps of a collection: cycle error, and maps composed through a hub shape.
+
+Maps computed pair by pair need not agree with each other: going from A to
+B and then to C may land elsewhere than going from A to C. With
+:math:`f_{AB}` the map from A's vertices to B's, the **cycle-consistency
+error** of a triple is
+
+.. math::
+
+    e(A, B, C) = \\frac{1}{|S| \\sqrt{\\mathrm{area}(C)}} \\sum_{i \\in S}
+    d_C\\big(f_{BC}(f_{AB}(i)),\\ f_{AC}(i)\\big)
+
+over a seeded sample :math:`S` of A's vertices, with :math:`d_C` the geodesic
+distance on C (0 for a consistent collection; it is no error against ground
+truth, but each cycle error is at most the sum of the three maps' errors).
+
+**Maps through a hub** (a star-shaped synchronisation, in the spirit of
+template-based map networks, e.g. Huang, Wang & Guibas, "Functional map
+networks for analyzing and browsing large shape collections", SIGGRAPH
+2014, who synchronise through a latent basis): the hub :math:`H` is the shape
+whose two-step maps agree best with the direct ones (the smallest mean
+Euclidean distance, divided by :math:`\\sqrt{\\mathrm{area}}`, between
+:math:`f_{HB}(f_{AH}(i))` and :math:`f_{AB}(i)` over the sampled A, B), and
+every map between two other shapes is replaced by
+:math:`f_{HB} \\circ f_{AH}`. Whether that lowers the error against ground
+truth is measured, not assumed (``benchmarks/RESULTS-collections.md``).
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+from pathlib import Path
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from ._params import check_int
+from .errors import ParameterError
+from .evaluation import GeodesicCache
+from .io import atomic_write, read_map, write_map
+from .mesh import Mesh, as_mesh
+
+Maps = Mapping[tuple[str, str], np.ndarray]
+
+
+def sample_triples(names: Sequence[str], maps: Maps, n_triples: int, random_state: int | None = 0
+                   ) -> list[tuple[str, str, str]]:
+    """Up to ``n_triples`` distinct ordered triples (A, B, C) whose three maps exist, seeded."""
+    triples = [t for t in itertools.permutations(names, 3)
+               if (t[0], t[1]) in maps and (t[1], t[2]) in maps and (t[0], t[2]) in maps]
+    rng = np.random.default_rng(random_state)
+    if len(triples) > n_triples:
+        triples = [triples[i] for i in np.sort(rng.choice(len(triples), size=n_triples, replace=False))]
+    return triples
+
+
+def cycle_errors(maps: Maps, meshes: Mapping[str, Mesh], triples: Sequence[tuple[str, str, str]], *,
+                 n_points: int = 200, geodesic: str = "heat", random_state: int | None = 0) -> np.ndarray:
+    """:math:`e(A, B, C)` of each triple (module docstring), ``(t,)`` float.
+
+    Parameters
+    ----------
+    maps : {(A, B): (n_A,) int}
+        Vertex maps; ``maps[A, B][i]`` is the vertex of B matched to vertex i of A.
+    meshes : {name: Mesh}
+    triples : sequence of (A, B, C)
+    n_points : int
+        Sampled vertices of A per triple.
+    geodesic : str
+        Geodesic solver of :math:`d_C`.
+    random_state : int or None
+        Seed of the samples.
+    """
+    n_points = check_int("n_points", n_points, minimum=1)
+    rng = np.random.default_rng(random_state)
+    cache = GeodesicCache(geodesic, max_meshes=len(meshes))
+    out = np.empty(len(triples))
+    for t, (a, b, c) in enumerate(triples):
+        n_a = len(maps[a, c])
+        sample = rng.choice(n_a, size=min(n_points, n_a), replace=False)
+        two_step = maps[b, c][maps[a, b][sample]]
+        direct = maps[a, c][sample]
+        distances = cache.pair_distances(meshes[c], two_step, direct)
+        out[t] = distances.mean() / np.sqrt(meshes[c].area)
+    return out
+
+
+def choose_hub(maps: Maps, meshes: Mapping[str, Mesh], *, n_points: int = 200,
+               random_state: int | None = 0) -> str:
+    """The shape whose two-step maps agree best with the direct maps (module docstring)."""
+    names = list(meshes)
+    rng = np.random.default_rng(random_state)
+    best, best_score = None, np.inf
+    for hub in names:
+        scores = []
+        for a, b in itertools.permutations([n for n in names if n != hub], 2):
+            if (a, hub) not in maps or (hub, b) not in maps or (a, b) not in maps:
+                continue
+            n_a = len(maps[a, b])
+            sample = rng.choice(n_a, size=min(n_points, n_a), replace=False)
+            V = meshes[b].vertices
+            gap = np.linalg.norm(V[maps[hub, b][maps[a, hub][sample]]] - V[maps[a, b][sample]], axis=1)
+            scores.append(gap.mean() / np.sqrt(meshes[b].area))
+        covers = all((a, hub) in maps and (hub, a) in maps for a in names if a != hub)
+        if scores and covers and np.mean(scores) < best_score:
+            best, best_score = hub, float(np.mean(scores))
+    if best is None:
+        raise ParameterError("No shape has maps to and from every other shape: the hub needs them "
+                             "(run the collection with --all-pairs and no failed pairs through it).")
+    return best
+
+
+def through_hub(maps: Maps, hub: str) -> dict[tuple[str, str], np.ndarray]:
+    """Every map between two shapes other than ``hub`` replaced by :math:`f_{HB} \\circ f_{AH}`."""
+    out = {}
+    for (a, b), mapping in maps.items():
+        out[a, b] = mapping if hub in (a, b) else maps[hub, b][maps[a, hub]]
+    return out
+
+
+def consistency_report(out_dir, shapes: Sequence[str], records: Sequence[dict], *, n_triples: int = 30,
+                       n_points: int = 200, geodesic: str = "heat", random_state: int | None = 0) -> dict:
+    """Cycle errors of a batch's maps and of the maps through a hub; writes ``consistent/`` and ``consistency.json``.
+
+    Parameters
+    ----------
+    out_dir : path
+        The folder of :func:`meshcorr.collection.batch`.
+    shapes : sequence of str
+        The mesh files of ``--all-pairs``.
+    records : sequence of dict
+        The batch's records (failed pairs are left out).
+
+    Returns
+    -------
+    report : dict
+        ``hub``, ``cycle_error`` and ``consistent_cycle_error`` (means over
+        the same sampled triples), ``n_triples``, ``path`` (the JSON file).
+    """
+    out = Path(out_dir)
+    names = {path: Path(path).stem for path in shapes}
+    meshes = {names[p]: as_mesh(p) for p in shapes}
+    maps = {(names[r["source"]], names[r["target"]]): read_map(r["map"]) for r in records if r["status"] == "ok"}
+    triples = sample_triples(list(meshes), maps, n_triples, random_state)
+    if not triples:
+        raise ParameterError("The cycle-consistency error needs three shapes whose maps all succeeded.")
+    hub = choose_hub(maps, meshes, n_points=n_points, random_state=random_state)
+    consistent = through_hub(maps, hub)
+    direct_errors = cycle_errors(maps, meshes, triples, n_points=n_points, geodesic=geodesic,
+                                 random_state=random_state)
+    hub_errors = cycle_errors(consistent, meshes, triples, n_points=n_points, geodesic=geodesic,
+                              random_state=random_state)
+    (out / "consistent").mkdir(exist_ok=True)
+    for (a, b), mapping in consistent.items():
+        write_map(out / "consistent" / f"{a}__{b}.txt", mapping)
+    report = {"hub": hub, "cycle_error": float(direct_errors.mean()),
+              "consistent_cycle_error": float(hub_errors.mean()), "n_triples": len(triples),
+              "n_points": n_points, "triples": [list(t) for t in triples],
+              "path": str(out / "consistency.json")}
+    payload = json.dumps(report, indent=1).encode()
+    atomic_write(out / "consistency.json", lambda file: file.write(payload))
+    return report

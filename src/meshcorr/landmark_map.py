@@ -1,0 +1,122 @@
+"""A dense map from a few corresponding vertices, and the checking of user landmarks.
+
+Given pairs :math:`(a_l, b_l)`, each vertex is described by its geodesic
+distances to the landmarks of its own shape, scaled by their mean (so that a
+uniform change of size, or of proportion averaged over the shape, cancels):
+
+.. math::
+
+    F_1(i) = \\frac{(g_1(a_1, i), \\dots, g_1(a_L, i))}{\\operatorname{mean} g_1(a, \\cdot)},
+    \\qquad
+    F_2(j) = \\frac{(g_2(b_1, j), \\dots, g_2(b_L, j))}{\\operatorname{mean} g_2(b, \\cdot)},
+
+and source vertex i goes to the target vertex of nearest :math:`F_2` (a
+KD-tree query). These are the geodesic "anchor" descriptors of the paper's
+step 6 without the embedding term, and the landmark-distance descriptors of
+functional-map pipelines (Ovsjanikov et al., "Functional maps", SIGGRAPH
+2012, section 6). The map is coarse (it is only as fine as the landmarks'
+spread) and is meant to be refined (:mod:`meshcorr.refine`).
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .errors import ParameterError
+from .mesh import Mesh
+
+RowFn = Callable[[int], np.ndarray]
+
+
+def landmark_descriptors(geodesics_from: RowFn, landmarks: np.ndarray) -> np.ndarray:
+    """``(n, L)`` geodesic distances to the landmarks, divided by their mean."""
+    rows = np.array([np.asarray(geodesics_from(int(v)), dtype=np.float64) for v in landmarks]).T
+    return rows / max(float(rows.mean()), 1e-12)
+
+
+def landmark_map(source_geodesics: RowFn, target_geodesics: RowFn, pairs: np.ndarray) -> np.ndarray:
+    """Dense source -> target vertex map from landmark pairs (module docstring).
+
+    Parameters
+    ----------
+    source_geodesics, target_geodesics : callable
+        ``f(i)`` returns the geodesic distances from vertex i on that shape, ``(n,)``.
+    pairs : (L, 2) int
+        (source vertex, target vertex), local numbering, L >= 1.
+
+    Returns
+    -------
+    mapping : (n1,) int
+        Landmark source vertices go exactly to their target vertex.
+    """
+    pairs = np.asarray(pairs, dtype=np.int64)
+    F1 = landmark_descriptors(source_geodesics, pairs[:, 0])
+    F2 = landmark_descriptors(target_geodesics, pairs[:, 1])
+    mapping = cKDTree(F2).query(F1)[1].astype(np.int64)
+    mapping[pairs[:, 0]] = pairs[:, 1]
+    return mapping
+
+
+def check_landmarks(landmarks, source: Mesh, target: Mesh) -> np.ndarray | None:
+    """Validate user landmark pairs and put them in the meshes' local numbering.
+
+    Parameters
+    ----------
+    landmarks : None or sequence of (source_index, target_index)
+        0-based indices into the input meshes' vertex lists.
+    source, target : Mesh
+        As loaded (vertices may have been dropped by ``largest_component``).
+
+    Returns
+    -------
+    pairs : (L, 2) int64 or None
+        Local vertex numbers of each pair; None when ``landmarks`` is None or empty.
+
+    Raises
+    ------
+    ParameterError
+        Not pairs of integers, an index out of range, a source vertex given
+        twice, or a vertex that was removed with a dropped component.
+    """
+    if landmarks is None:
+        return None
+    try:
+        table = np.asarray(landmarks)
+    except (TypeError, ValueError) as exc:
+        raise ParameterError("landmarks must be a sequence of (source_index, target_index) pairs.") from exc
+    if table.size == 0:
+        return None
+    if table.ndim != 2 or table.shape[1] != 2:
+        raise ParameterError("landmarks must be a sequence of (source_index, target_index) pairs; "
+                             f"got an array of shape {table.shape}.")
+    if table.dtype.kind not in "iu":
+        whole = table.dtype.kind == "f" and bool(np.all(np.isfinite(table))) and bool(np.all(table == np.round(table)))
+        if not whole:
+            raise ParameterError("Landmark indices must be whole numbers (0-based vertex indices); got "
+                                 f"{table.reshape(-1)[:4].tolist()}...")
+    table = table.astype(np.int64)
+    for column, mesh, side in ((0, source, "source"), (1, target, "target")):
+        bad = (table[:, column] < 0) | (table[:, column] >= mesh.n_original)
+        if bad.any():
+            row = int(np.flatnonzero(bad)[0])
+            raise ParameterError(f"Landmark {row} has {side} index {int(table[row, column])}, outside the "
+                                 f"{side} mesh's vertices [0, {mesh.n_original}). Indices are 0-based.")
+    values, counts = np.unique(table[:, 0], return_counts=True)
+    if (counts > 1).any():
+        raise ParameterError(f"Source vertex {int(values[counts > 1][0])} has more than one landmark; "
+                             "give each source vertex at most one target vertex.")
+    local = []
+    for column, mesh, side in ((0, source, "source"), (1, target, "target")):
+        lookup = np.full(mesh.n_original, -1, dtype=np.int64)
+        lookup[mesh.kept] = np.arange(mesh.n_vertices)
+        mapped = lookup[table[:, column]]
+        if (mapped < 0).any():
+            row = int(np.flatnonzero(mapped < 0)[0])
+            raise ParameterError(f"Landmark {row}: {side} vertex {int(table[row, column])} lies on a "
+                                 "component that was removed (largest_component=True); choose a vertex "
+                                 "on the largest component.")
+        local.append(mapped)
+    return np.stack(local, axis=1)

@@ -1,0 +1,157 @@
+"""The whole-map choice: several complete candidate maps, judged by the whole map.
+
+The spectral pipeline's near-tied configurations (:mod:`meshcorr.symmetry`)
+are chosen between by scores of maps that are only as fine as a
+five-dimensional embedding, and every one of them can be wrong when the
+shapes' proportions differ (arms sent to legs). After refinement, this
+stage puts the spectral map next to maps started from matched extremities
+(:mod:`meshcorr.extremities`) and, when given, from the user's landmarks
+(:mod:`meshcorr.landmark_map`), each refined the same way, and keeps the
+one that the following energies prefer:
+
+- **orientation** (:func:`meshcorr.orientation.orientation_score`): the
+  area fraction on which the map keeps the orientation. A left/right mirror
+  reverses it everywhere; maps below :data:`ORIENTATION_MIN` are set aside
+  whenever one above exists and the orientation can be trusted.
+- **metric distortion** (:func:`meshcorr.symmetry.metric_distortion`, the
+  Gromov-Hausdorff-type energy of Bronstein, Bronstein & Kimmel, PNAS 2006):
+  how much geodesic distances change under the map, from
+  :data:`N_DISTORTION_SOURCES` seeded source vertices to all others. A map
+  whose legs are swapped under a right upper body (a *partial* mirror) keeps
+  distances within each leg but not from a foot to a hand: it is more
+  distorted than the right map, which the whole-surface orientation cannot
+  see. The least distorted of the remaining maps is kept.
+- **regional orientation** (:func:`meshcorr.orientation.regional_orientation`):
+  the orientation score of the worst of 12 regions; reported, so that a
+  partly mirrored result can be seen in ``--json``.
+- **landmark error**: with user landmarks, the mean geodesic distance on the
+  target (divided by its largest geodesic) between where the map sends each
+  landmark and where the user says it goes; maps within
+  :data:`LANDMARK_TOLERANCE` of the best are kept before the rules above.
+  Landmark vertices are then mapped exactly to their partners.
+
+Measured on TOSCA, TOSCA gorilla -> human and SHREC'07 pairs in
+``benchmarks/RESULTS-robustness.md``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .orientation import orientation_score, regional_orientation
+from .symmetry import metric_distortion
+
+#: Maps of orientation score below this are set aside when one above exists.
+ORIENTATION_MIN = 0.6
+#: Seeded source vertices of the metric distortion.
+N_DISTORTION_SOURCES = 24
+#: Maps whose landmark error is within this (normalised geodesic distance) of the best one are kept.
+LANDMARK_TOLERANCE = 0.02
+
+
+@dataclass
+class MapCandidate:
+    """One complete candidate map and its scores.
+
+    Attributes
+    ----------
+    origin : str
+        Where it comes from: ``"spectral"`` (the pipeline's map),
+        ``"spectral-alternative"`` (its alternative, unrefined),
+        ``"extremities-r"`` (the r-th best extremity assignment) or
+        ``"landmarks"``.
+    mapping : (n1,) int
+        Source vertex -> target vertex, local numbering.
+    orientation, distortion, regional_orientation, landmark_error : float
+        The energies of the module docstring (NaN where not measured).
+    extra : dict
+        ``extremity_energy`` for extremity maps.
+    """
+
+    origin: str
+    mapping: np.ndarray
+    orientation: float = np.nan
+    distortion: float = np.nan
+    regional_orientation: float = np.nan
+    landmark_error: float = np.nan
+    extra: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        def rounded(value, digits=4):
+            return None if not np.isfinite(value) else round(float(value), digits)
+
+        return {"origin": self.origin, "orientation": rounded(self.orientation),
+                "distortion": rounded(self.distortion, 5),
+                "regional_orientation": rounded(self.regional_orientation),
+                "landmark_error": rounded(self.landmark_error, 5),
+                **{key: rounded(value, 5) for key, value in self.extra.items()}}
+
+
+def score_candidates(candidates: list[MapCandidate], source, target, source_geodesics, target_geodesics, *,
+                     reliable: bool, landmarks: np.ndarray | None = None,
+                     random_state: int | None = 0) -> None:
+    """Fill in each candidate's energies (module docstring), in place.
+
+    Parameters
+    ----------
+    candidates : list of MapCandidate
+    source, target : Mesh
+    source_geodesics, target_geodesics : callable
+        ``f(i)``: normalised geodesic distances from vertex i, ``(n,)``.
+    reliable : bool
+        Whether both meshes' outsides are defined (orientation scores are
+        then measured).
+    landmarks : (L, 2) int, optional
+        User landmark pairs, local numbering.
+    random_state : int or None
+        Seed of the distortion's source vertices and the orientation sample.
+    """
+    rng = np.random.default_rng(random_state)
+    n1 = source.n_vertices
+    sources = rng.choice(n1, size=min(N_DISTORTION_SOURCES, n1), replace=False)
+    rows: dict = {}
+    for candidate in candidates:
+        mapping = candidate.mapping
+        candidate.distortion = metric_distortion(source_geodesics, target_geodesics, mapping, sources, rows)
+        if reliable:
+            candidate.orientation = orientation_score(source, target, mapping, random_state=random_state)
+            candidate.regional_orientation = float(
+                regional_orientation(source, target, mapping, random_state=random_state).min())
+        if landmarks is not None:
+            candidate.landmark_error = float(np.mean(
+                [target_geodesics(int(b))[mapping[a]] for a, b in landmarks]))
+
+
+def choose_map(candidates: list[MapCandidate], *, reliable: bool
+               ) -> tuple[MapCandidate, MapCandidate | None]:
+    """The map the energies prefer, and the best map of the opposite orientation.
+
+    Parameters
+    ----------
+    candidates : list of MapCandidate
+        Scored by :func:`score_candidates`; the spectral map first.
+    reliable : bool
+        Whether orientation scores were measured.
+
+    Returns
+    -------
+    chosen : MapCandidate
+    alternative : MapCandidate or None
+        The least distorted candidate whose orientation score is on the other
+        side of 0.5 (with an unreliable orientation: the least distorted
+        other candidate); None if there is none.
+    """
+    pool = list(candidates)
+    if all(np.isfinite(c.landmark_error) for c in pool):
+        best = min(c.landmark_error for c in pool)
+        pool = [c for c in pool if c.landmark_error <= best + LANDMARK_TOLERANCE]
+    if reliable:
+        pool = [c for c in pool if c.orientation >= ORIENTATION_MIN] or pool
+    chosen = min(pool, key=lambda c: c.distortion)
+    rest = [c for c in candidates if c is not chosen]
+    if reliable:
+        rest = [c for c in rest if (c.orientation >= 0.5) != (chosen.orientation >= 0.5)]
+    alternative = min(rest, key=lambda c: c.distortion) if rest else None
+    return chosen, alternative

@@ -1,0 +1,267 @@
+"""meshcorr batch on a real local Dask cluster: same maps, failures recorded, resumable (issue 13)."""
+
+from __future__ import annotations
+
+import builtins
+import threading
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+import meshcorr
+from meshcorr import datasets as ds
+from meshcorr.collection import all_pairs, batch, map_name, read_pairs, template_pairs
+from meshcorr.cli import main
+from meshcorr.consistency import choose_hub, cycle_errors, sample_triples, through_hub
+from meshcorr.errors import MeshcorrError, ParameterError
+from meshcorr.io import read_map
+
+distributed = pytest.importorskip("distributed", reason="the batch tests need meshcorr[dask] (dask[distributed])")
+
+POSES = ("rest", "bent", "curled", 0.4)
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """A scheduler and two single-threaded worker processes on loopback, started once for the module."""
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=":0") as local, distributed.Client(local) as client:
+        yield client
+
+
+@pytest.fixture(scope="module")
+def shapes(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("shapes")
+    paths = []
+    for i, pose in enumerate(POSES):
+        shape = ds.creature(resolution=1, pose=pose)  # same vertices and faces: the truth is the identity
+        path = folder / f"c{i}.off"
+        trimesh.Trimesh(shape.vertices, shape.faces, process=False).export(path)
+        paths.append(str(path))
+    bad = folder / "bad.off"
+    bad.write_text("OFF\n3 1 0\n0 0 0\n1 0 0\n")  # a vertex line missing
+    return paths, str(bad)
+
+
+def test_all_pairs_batch_gives_the_per_pair_maps(cluster, shapes, tmp_path):
+    paths, _ = shapes
+    seen = []
+    assert meshcorr.batch is batch
+    records = batch(all_pairs(paths), tmp_path, client=cluster, ground_truth="identity",
+                    progress=lambda *a: seen.append(a))
+    assert len(records) == 12 and all(r["status"] == "ok" for r in records)
+    for record in records:
+        direct = meshcorr.match(record["source"], record["target"])
+        np.testing.assert_array_equal(read_map(record["map"]), direct.map)
+        assert record["seconds"] > 0 and 0 <= record["mean_error"] < 0.05  # poses of one shape
+    assert seen[0] == (0, 12, 0, None) and seen[-1][:3] == (12, 12, 0) and seen[-1][3] == 0
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["n_pairs"] == 12 and summary["n_failed"] == 0
+    assert (tmp_path / "summary.csv").read_text().splitlines()[0] == \
+        "source,target,map,status,seconds,cpu_seconds,mean_error,error"
+    # Consistency over the collection: the cycle error of the direct maps and of the hub's.
+    names = [Path(p).stem for p in paths]
+    maps = {(Path(r["source"]).stem, Path(r["target"]).stem): read_map(r["map"]) for r in records}
+    meshes = {n: meshcorr.as_mesh(p) for n, p in zip(names, paths)}
+    triples = sample_triples(names, maps, 10)
+    assert len(triples) == 10 and len(set(triples)) == 10
+    errors = cycle_errors(maps, meshes, triples)
+    assert np.all(errors >= 0) and errors.mean() < 0.05
+    hub = choose_hub(maps, meshes)
+    composed = through_hub(maps, hub)
+    a, b = [n for n in names if n != hub][:2]
+    np.testing.assert_array_equal(composed[a, b], maps[hub, b][maps[a, hub]])
+    np.testing.assert_array_equal(composed[a, hub], maps[a, hub])
+    # A map composed with the identity maps: a collection of copies is exactly consistent.
+    identity = {key: np.arange(500) for key in maps}
+    np.testing.assert_array_equal(cycle_errors(identity, meshes, triples), 0.0)
+
+
+def test_a_corrupt_mesh_fails_its_pairs_and_the_others_finish(cluster, shapes, tmp_path, capsys):
+    paths, bad = shapes
+    pairs = [(paths[0], paths[1]), (bad, paths[0]), (paths[1], paths[0]), (paths[2], bad)]
+    records = batch(pairs, tmp_path, client=cluster)
+    assert [r["status"] for r in records] == ["ok", "failed", "ok", "failed"]
+    assert "bad.off" in records[1]["error"] and "truncated" in records[1]["error"]
+    assert not (tmp_path / "maps" / map_name(bad, paths[0])).exists()
+    # The CLI on the same cluster: exit code 4 when a pair failed, 0 once every pair is mapped.
+    pairs_file = tmp_path / "pairs.txt"
+    pairs_file.write_text(f"# source target\n{paths[0]} {paths[1]}\n\n{bad} {paths[0]}\n")
+    address = cluster.scheduler.address
+    assert main(["batch", "--pairs", str(pairs_file), "--out", str(tmp_path / "cli"), "--scheduler", address]) == 4
+    err = capsys.readouterr().err
+    assert "1 of 2 pairs mapped" in err and "1 failed" in err and "[batch]" in err
+    pairs_file.write_text(f"{paths[0]} {paths[1]}\n")
+    assert main(["batch", "--pairs", str(pairs_file), "--out", str(tmp_path / "cli"), "--scheduler", address,
+                 "-q"]) == 0
+
+
+def test_an_interrupted_batch_resumes(cluster, shapes, tmp_path):
+    paths, _ = shapes
+    pairs = template_pairs(paths[0], paths)
+
+    def stop_after_two(done, total, failed, left):
+        if done == 2:
+            raise KeyboardInterrupt  # Ctrl-C, or a kill after the second pair
+
+    with pytest.raises(KeyboardInterrupt):
+        batch(pairs, tmp_path, client=cluster, progress=stop_after_two)
+    first = json.loads((tmp_path / "summary.json").read_text())["pairs"]
+    assert len(first) == 2 and all(r["status"] == "ok" for r in first)
+    written = {r["map"]: Path(r["map"]).stat().st_mtime_ns for r in first}
+    (tmp_path / "maps" / ".c0__c3.txt.0123.tmp").write_text("left by a killed worker")
+    totals = []
+    records = batch(pairs, tmp_path, client=cluster, progress=lambda d, t, f, s: totals.append(t))
+    assert totals[0] == 1  # only the pair not done yet ran
+    assert [r["status"] for r in records] == ["ok"] * 3
+    assert {m: Path(m).stat().st_mtime_ns for m in written} == written  # done maps untouched
+    for record in records:
+        np.testing.assert_array_equal(read_map(record["map"]),
+                                      meshcorr.match(record["source"], record["target"]).map)
+    with pytest.raises(ParameterError, match="holds results made with other settings"):
+        batch(pairs, tmp_path, client=cluster, random_state=1)
+
+
+def test_batch_checks_its_input_before_any_work(shapes, tmp_path):
+    paths, _ = shapes
+    for options, message in [({"k": 1}, "'k' parameter must be an int >= 2"),
+                             ({"symmetry": "x"}, "'symmetry' parameter must be one of"),
+                             ({"method": "icp"}, "spectral method only"),
+                             ({"colour": 1}, "Unknown option of meshcorr.batch"),
+                             ({"landmarks": [(0, 0)]}, "User landmarks belong to one pair")]:
+        with pytest.raises(ParameterError, match=message):
+            batch(all_pairs(paths[:2]), tmp_path, **options)
+    with pytest.raises(ParameterError, match="has no pairs"):
+        batch([], tmp_path)
+    with pytest.raises(ParameterError, match="same map file"):
+        batch([(paths[0], paths[1]), (paths[0], str(tmp_path / "x" / "c1.off"))], tmp_path)
+    with pytest.raises(ParameterError, match="'identity' or a folder of SHAPE.vts"):
+        batch(all_pairs(paths[:2]), tmp_path, ground_truth="truth.txt")
+    with pytest.raises(ParameterError, match="at least 2 distinct mesh files"):
+        all_pairs([paths[0], paths[0]])
+    assert template_pairs(paths[0], paths[:3]) == [(paths[0], paths[1]), (paths[0], paths[2])]
+    (tmp_path / "pairs.txt").write_text("a.off b.off c.off\n")
+    with pytest.raises(ParameterError, match="line 1: expected two mesh paths"):
+        read_pairs(tmp_path / "pairs.txt")
+    (tmp_path / "pairs.txt").write_text("# nothing\n")
+    with pytest.raises(ParameterError, match="lists no pairs"):
+        read_pairs(tmp_path / "pairs.txt")
+    with pytest.raises(ParameterError, match="does not exist"):
+        read_pairs(tmp_path / "none.txt")
+    (tmp_path / "pairs.txt").write_text("a.off /abs/b.off\n")
+    assert read_pairs(tmp_path / "pairs.txt") == [(str(tmp_path / "a.off"), "/abs/b.off")]
+
+
+def test_cli_usage_errors(shapes, tmp_path, capsys, monkeypatch):
+    paths, _ = shapes
+    monkeypatch.setattr("meshcorr.collection.CONNECT_TIMEOUT", 1)
+    assert main(["batch", "--all-pairs", *paths[:2], "--out", str(tmp_path), "--set", "nokey"]) == 2
+    assert "--set takes KEY=VALUE" in capsys.readouterr().err
+    assert main(["batch", "--pairs", "p.txt", paths[0], "--out", str(tmp_path)]) == 2
+    assert "SHAPES of --template" in capsys.readouterr().err
+    assert main(["batch", "--template", paths[0], paths[1], "--consistency", "--out", str(tmp_path)]) == 2
+    assert "--consistency needs --all-pairs" in capsys.readouterr().err
+    assert main(["batch", "--all-pairs", *paths[:2], "--out", str(tmp_path), "--scheduler",
+                 "tcp://127.0.0.1:9"]) == 1
+    assert "No Dask scheduler answered at tcp://127.0.0.1:9" in capsys.readouterr().err
+
+
+def test_without_dask_the_batch_names_the_extra(shapes, tmp_path, monkeypatch, capsys):
+    real_import = builtins.__import__
+
+    def no_dask(name, *args, **kwargs):
+        if name.split(".")[0] in ("distributed", "dask"):
+            raise ImportError(f"No module named {name!r}")
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", no_dask)
+    paths, _ = shapes
+    with pytest.raises(MeshcorrError, match=r'pip install "meshcorr\[dask\]"'):
+        batch(all_pairs(paths[:2]), tmp_path)
+    assert main(["batch", "--all-pairs", *paths[:2], "--out", str(tmp_path)]) == 1
+    assert 'meshcorr[dask]' in capsys.readouterr().err
+
+
+def test_meshcorr_threads_1_runs_the_thread_pools_in_the_calling_thread(monkeypatch):
+    from meshcorr._threads import parallel_map
+
+    monkeypatch.setenv("MESHCORR_THREADS", "1")  # what each worker process of the local cluster gets
+    assert parallel_map(lambda _: threading.get_ident(), [0, 1, 2]) == [threading.get_ident()] * 3
+
+
+def test_consistency_error_paths(shapes, tmp_path):
+    paths, _ = shapes
+    mesh = meshcorr.as_mesh(paths[0])
+    meshes = {"a": mesh, "b": mesh, "c": mesh}
+    one_way = {("a", "b"): np.arange(500), ("b", "c"): np.arange(500), ("a", "c"): np.arange(500)}
+    with pytest.raises(ParameterError, match="No shape has maps to and from every other shape"):
+        choose_hub(one_way, meshes)
+    with pytest.raises(ParameterError, match="'n_points' parameter must be an int >= 1"):
+        cycle_errors(one_way, meshes, [("a", "b", "c")], n_points=0)
+    from meshcorr.consistency import consistency_report
+
+    records = [{"source": paths[0], "target": paths[1], "status": "failed", "map": ""}]
+    with pytest.raises(ParameterError, match="needs three shapes whose maps all succeeded"):
+        consistency_report(tmp_path, paths[:3], records)
+
+
+def test_a_damaged_summary_and_a_partial_target_are_reported(shapes, tmp_path):
+    from meshcorr.collection import _mean_error
+    from meshcorr.prepared import prepare
+
+    paths, _ = shapes
+    (tmp_path / "summary.json").write_text("{")
+    with pytest.raises(ParameterError, match="is not a batch summary"):
+        batch(all_pairs(paths[:2]), tmp_path)
+    shape = ds.creature(resolution=1)
+    two = (np.concatenate([shape.vertices, shape.vertices + 10]),
+           np.concatenate([shape.faces, shape.faces + shape.n_vertices]))
+    partial = prepare(two, largest_component=True)
+    with pytest.raises(ParameterError, match="needs the whole target mesh"):
+        _mean_error(partial, partial, np.arange(partial.n_vertices), "a.off", "b.off", "identity", "heat")
+
+
+def test_cli_batch_cache_and_ctrl_c(cluster, shapes, tmp_path, monkeypatch, capsys):
+    paths, _ = shapes
+    address = cluster.scheduler.address
+    cache = tmp_path / "cache"
+    assert main(["batch", "--template", paths[0], paths[1], "--out", str(tmp_path / "o"), "--scheduler", address,
+                 "--cache", str(cache), "-q"]) == 0
+    assert len(list(cache.glob("*.npz"))) == 2  # both shapes prepared into the cache by the workers
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("meshcorr.collection.batch", interrupted)
+    assert main(["batch", "--template", paths[0], paths[1], "--out", str(tmp_path / "o2"), "-q"]) == 130
+    assert "interrupted" in capsys.readouterr().err
+
+
+class _CrashingClient:
+    """A stand-in client whose pair tasks fail in the scheduler (as when a pair kills its worker)."""
+
+    class Future:
+        def __init__(self, key):
+            self.key = key
+
+        def result(self):
+            raise RuntimeError(f"KilledWorker: attempted to run task {self.key} on 3 different workers")
+
+        def release(self):
+            pass
+
+    def submit(self, function, *args, key):
+        return self.Future(key)
+
+
+def test_a_pair_that_crashes_its_worker_is_recorded(shapes, tmp_path, monkeypatch):
+    paths, _ = shapes
+    monkeypatch.setattr(distributed, "as_completed", lambda futures: iter(futures))
+    records = batch(all_pairs(paths[:2]), tmp_path, client=_CrashingClient())
+    assert [r["status"] for r in records] == ["failed", "failed"]
+    assert "KilledWorker" in records[0]["error"] and records[0]["map"].endswith("c0__c1.txt")
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["n_failed"] == 2

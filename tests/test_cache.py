@@ -1,0 +1,97 @@
+"""The on-disk cache of prepared shapes: keys, refusals, concurrent writers, CLI (issue 13)."""
+
+from __future__ import annotations
+
+import multiprocessing
+
+import numpy as np
+import pytest
+
+import meshcorr
+from meshcorr import datasets as ds
+from meshcorr.cache import ShapeCache, as_cache, default_cache_dir
+from meshcorr.cli import main
+from meshcorr.errors import ParameterError
+from meshcorr.prepared import SHAPE_SETTINGS, PreparedShape, load_mesh, prepare
+
+
+@pytest.fixture(scope="module")
+def mesh():
+    shape = ds.creature(resolution=1)
+    return load_mesh((shape.vertices, shape.faces), SHAPE_SETTINGS, name="creature")
+
+
+def test_a_cache_hit_is_the_same_shape_and_settings_change_the_key(mesh, tmp_path):
+    cache = ShapeCache(tmp_path / "c")
+    first = prepare(mesh, cache=cache)
+    assert cache.info()["files"] == 1 and cache.info()["bytes"] > 0
+    hit = cache.get(mesh, SHAPE_SETTINGS, "dense")
+    assert hit is not None and hit is not first
+    np.testing.assert_array_equal(hit.spectrum.embedding, first.spectrum.embedding)
+    other = ds.creature(resolution=1, pose="bent")
+    np.testing.assert_array_equal(meshcorr.match(hit, (other.vertices, other.faces)).map,
+                                  meshcorr.match(mesh, (other.vertices, other.faces)).map)
+    keys = {cache.key(mesh, SHAPE_SETTINGS, "dense"), cache.key(mesh, SHAPE_SETTINGS, "scalable"),
+            cache.key(mesh, dict(SHAPE_SETTINGS, random_state=1), "dense"),
+            cache.key(mesh, dict(SHAPE_SETTINGS, refine_k=30), "dense")}
+    assert len(keys) == 4
+    prepare(mesh, cache=cache, random_state=1)
+    assert cache.info()["files"] == 2
+
+
+def test_the_cache_refuses_a_file_from_other_settings(mesh, tmp_path):
+    cache = ShapeCache(tmp_path)
+    # A file made with random_state=1 put under the key of random_state=0 is not used: it is prepared again.
+    wrong = prepare(mesh, random_state=1)
+    path = cache.path(cache.key(mesh, SHAPE_SETTINGS, "dense"))
+    wrong.save(path)
+    assert cache.get(mesh, SHAPE_SETTINGS, "dense") is None
+    shape = cache.prepare(mesh, SHAPE_SETTINGS, "dense")
+    assert shape.settings["random_state"] == 0
+    assert PreparedShape.load(path).settings["random_state"] == 0  # replaced
+    path.write_bytes(b"damaged")
+    assert cache.get(mesh, SHAPE_SETTINGS, "dense") is None
+
+
+def _prepare_into(root: str) -> str:
+    shape = ds.creature(resolution=1)
+    return prepare((shape.vertices, shape.faces), cache=root, name="creature").digest
+
+
+def test_concurrent_writers_leave_a_valid_cache(mesh, tmp_path):
+    root = str(tmp_path / "shared")
+    with multiprocessing.get_context("spawn").Pool(3) as pool:
+        digests = pool.map(_prepare_into, [root] * 3)
+    cache = ShapeCache(root)
+    assert len(set(digests)) == 1 and cache.info()["files"] == 1
+    assert not [p for p in cache.root.iterdir() if p.name.endswith(".tmp")]
+    loaded = cache.get(mesh, SHAPE_SETTINGS, "dense")
+    np.testing.assert_array_equal(loaded.spectrum.embedding, prepare(mesh).spectrum.embedding)
+
+
+def test_cache_folder_and_cli(mesh, tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("MESHCORR_CACHE", str(tmp_path / "env"))
+    assert default_cache_dir() == tmp_path / "env"
+    monkeypatch.delenv("MESHCORR_CACHE")
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert default_cache_dir() == tmp_path / "xdg" / "meshcorr"
+    assert as_cache(True).root == tmp_path / "xdg" / "meshcorr"
+    prepare(mesh, cache=str(tmp_path / "c"))
+    (tmp_path / "c" / ".x.npz.abc.tmp").write_bytes(b"left by a killed writer")
+    assert main(["cache", "info", "--dir", str(tmp_path / "c")]) == 0
+    assert ": 1 prepared shapes, " in capsys.readouterr().out
+    assert main(["cache", "clear", "--dir", str(tmp_path / "c")]) == 0
+    assert "removed 1 prepared shapes" in capsys.readouterr().out
+    assert list((tmp_path / "c").iterdir()) == []
+    assert main(["cache", "info", "--dir", str(tmp_path / "none")]) == 0
+    assert ": 0 prepared shapes, 0.0 MiB" in capsys.readouterr().out
+
+
+def test_bad_cache_arguments(tmp_path, capsys):
+    with pytest.raises(ParameterError, match="must be a ShapeCache, a folder path or True"):
+        as_cache(3)
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(ParameterError, match="is a file: give a folder"):
+        ShapeCache(tmp_path / "file")
+    assert main(["cache", "info", "--dir", str(tmp_path / "file")]) == 2
+    assert "is a file" in capsys.readouterr().err

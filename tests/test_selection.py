@@ -1,0 +1,163 @@
+"""Whole-map choice (meshcorr.selection), extremities and user landmarks (issue 12)."""
+
+import numpy as np
+import pytest
+from scipy.spatial import cKDTree
+
+import meshcorr
+from meshcorr import datasets
+from meshcorr.errors import ParameterError
+from meshcorr.extremities import find_extremities, match_extremities
+from meshcorr.landmark_map import check_landmarks, landmark_map
+from meshcorr.mesh import Mesh, as_mesh
+from meshcorr.orientation import orientation_score, regional_orientation
+from meshcorr.selection import MapCandidate, choose_map, score_candidates
+
+# A left/right symmetric "person" on a sphere: head, two arms, two legs, a nose in front.
+TIPS = {"head": ((0, 0, 1), 0.9), "nose": ((0, 1, 0.2), 0.35), "arm_l": ((1, 0, 0.3), 0.8),
+        "arm_r": ((-1, 0, 0.3), 0.8), "leg_l": ((0.45, 0, -1), 1.1), "leg_r": ((-0.45, 0, -1), 1.1)}
+
+
+def _person(subdivisions: int = 3):
+    vertices, faces = datasets.sphere(subdivisions=subdivisions)
+    u = vertices / np.linalg.norm(vertices, axis=1, keepdims=True)
+    radius = np.ones(len(u))
+    for direction, height in TIPS.values():
+        d = np.asarray(direction, float) / np.linalg.norm(direction)
+        radius += height * np.exp(-(1 - u @ d) / 0.03)
+    return u * radius[:, None], np.asarray(faces)
+
+
+@pytest.fixture(scope="module")
+def person():
+    vertices, faces = _person()
+    mesh = Mesh(vertices, faces, name="person")
+    # The sphere's vertices are symmetric under x -> -x: the mirror vertex of each.
+    mirror = cKDTree(vertices).query(vertices * [-1, 1, 1])[1]
+    assert np.allclose(vertices[mirror], vertices * [-1, 1, 1], atol=1e-9)
+    return mesh, mirror
+
+
+def _geodesics(mesh):
+    from meshcorr.geodesics import geodesic_solver
+
+    solver = geodesic_solver(mesh.vertices, mesh.faces, "heat")
+    rows = {}
+
+    def row(i):
+        if i not in rows:
+            rows[i] = solver.distances([int(i)])[0]
+        return rows[i] / 5.0
+    return row
+
+
+def _tip_vertex(mesh, name):
+    d = np.asarray(TIPS[name][0], float)
+    return int(np.argmax(mesh.vertices @ (d / np.linalg.norm(d))))
+
+
+def test_extremities_are_the_six_tips(person):
+    mesh, _ = person
+    tips = find_extremities(mesh, _geodesics(mesh), length_unit=5.0)
+    expected = {_tip_vertex(mesh, name) for name in TIPS}
+    found = set(tips.vertices.tolist())
+    # A vertex near each tip (within a bump radius) is found, and nothing else.
+    assert len(found) == 6
+    for vertex in expected:
+        assert min(np.linalg.norm(mesh.vertices[list(found)] - mesh.vertices[vertex], axis=1)) < 0.4
+
+
+def test_best_extremity_assignments_are_the_identity_and_its_mirror(person):
+    mesh, mirror = person
+    g = _geodesics(mesh)
+    tips = find_extremities(mesh, g, length_unit=5.0)
+    best = match_extremities(tips, tips, n_best=4)
+    # Exact symmetry: the identity and the full mirror cost (about) nothing, partial swaps more.
+    identity = {tuple(map(int, pair)) for pair in np.stack([tips.vertices, tips.vertices], 1)}
+    assert {tuple(map(int, p)) for p in best[0][1]} in (identity, {(int(a), int(mirror[a])) for a in tips.vertices})
+    assert best[0][0] < 1e-3 and best[1][0] < 1e-3
+    assert best[2][0] > 10 * max(best[0][0], 1e-4)
+
+
+def test_a_map_with_swapped_legs_is_seen_region_by_region_and_rejected(person):
+    mesh, mirror = person
+    identity = np.arange(mesh.n_vertices)
+    legs = mesh.vertices[:, 2] < -0.6
+    swapped = np.where(legs, mirror, identity)
+    # The whole-surface score hardly sees it; the worst region does.
+    assert orientation_score(mesh, mesh, swapped) > 0.7
+    assert regional_orientation(mesh, mesh, identity).min() > 0.9
+    assert regional_orientation(mesh, mesh, swapped).min() < 0.1
+    candidates = [MapCandidate("mirror", mirror), MapCandidate("legs swapped", swapped),
+                  MapCandidate("right", identity)]
+    g = _geodesics(mesh)
+    score_candidates(candidates, mesh, mesh, g, g, reliable=True)
+    assert candidates[1].distortion > 2 * candidates[2].distortion
+    assert candidates[0].orientation < 0.1
+    chosen, alternative = choose_map(candidates, reliable=True)
+    assert chosen.origin == "right" and alternative.origin == "mirror"
+
+
+def test_landmarks_settle_the_left_right_choice(person):
+    mesh, mirror = person
+    rng = np.random.default_rng(3)
+    order = rng.permutation(mesh.n_vertices)
+    target = Mesh(mesh.vertices[order] * 1.7, mesh.faces.copy(), name="copy")
+    target = Mesh(mesh.vertices[order] * 1.7, np.argsort(order)[mesh.faces], name="copy")
+    truth = np.argsort(order)           # source vertex i is target vertex truth[i]
+    mirrored = truth[mirror]             # the left/right mirror of the truth
+    # Landmarks that say "mirror": the map must follow them, exactly at the landmarks.
+    picks = [_tip_vertex(mesh, n) for n in ("head", "arm_l", "leg_r", "nose")]
+    pairs = [(int(i), int(mirrored[i])) for i in picks]
+    result = meshcorr.match((mesh.vertices, mesh.faces), (target.vertices, target.faces), landmarks=pairs)
+    assert all(result.map[i] == j for i, j in pairs)
+    assert np.mean(result.map == mirrored) > 0.9
+    chosen = [c for c in result.map_candidates if c["chosen"]][0]
+    assert chosen["landmark_error"] < 0.02
+    # The same landmarks the other way round give the truth.
+    pairs = [(int(i), int(truth[i])) for i in picks]
+    result = meshcorr.match((mesh.vertices, mesh.faces), (target.vertices, target.faces), landmarks=pairs)
+    assert np.mean(result.map == truth) > 0.9
+
+
+def test_a_shape_against_its_mirror_image_maps_to_the_reflection():
+    shape = datasets.creature(resolution=1)
+    vertices = np.asarray(shape.vertices) * [-1, 1, 1]
+    faces = np.asarray(shape.faces)[:, ::-1]  # rewound so that the mirror image faces outwards
+    result = meshcorr.match((shape.vertices, shape.faces), (vertices, faces))
+    # No orientation-preserving isometry exists: the reflection (vertex i -> i) is the answer.
+    assert np.mean(result.map == np.arange(len(vertices))) > 0.9
+
+
+def test_landmark_map_of_a_copy_is_the_identity(person):
+    mesh, _ = person
+    g = _geodesics(mesh)
+    picks = np.array([_tip_vertex(mesh, n) for n in ("head", "arm_l", "leg_r", "nose", "arm_r")])
+    mapping = landmark_map(g, g, np.stack([picks, picks], axis=1))
+    assert np.mean(mapping == np.arange(mesh.n_vertices)) > 0.8
+    assert np.all(mapping[picks] == picks)
+
+
+@pytest.mark.parametrize("landmarks, message", [
+    ([(0, 1, 2)], "pairs"),
+    ([(0, 10**6)], "outside the target"),
+    ([(-1, 0)], "outside the source"),
+    ([(0, 1), (0, 2)], "more than one landmark"),
+    ([(0.5, 1)], "whole numbers"),
+    ([("a", "b")], "whole numbers"),
+])
+def test_bad_landmarks_are_refused(person, landmarks, message):
+    mesh, _ = person
+    with pytest.raises(ParameterError, match=message):
+        check_landmarks(landmarks, mesh, mesh)
+
+
+def test_a_landmark_on_a_removed_component_is_refused():
+    big = datasets.sphere(subdivisions=3)
+    small = datasets.sphere(subdivisions=1, radius=0.1)
+    vertices = np.vstack([big[0], np.asarray(small[0]) + 5.0])
+    faces = np.vstack([big[1], np.asarray(small[1]) + len(big[0])])
+    mesh = as_mesh((vertices, faces), largest_component=True)
+    with pytest.raises(ParameterError, match="component that was removed"):
+        check_landmarks([(len(vertices) - 1, 0)], mesh, mesh)
+    assert check_landmarks([(3, 4)], mesh, mesh).tolist() == [[3, 4]]

@@ -11,21 +11,9 @@ import sys
 
 import numpy as np
 import pytest
-import trimesh
+from test_cli import pair  # noqa: F401 - the tube pair fixture (source.off, target.ply)
 
-from meshcorr import datasets as ds
 from meshcorr.cli import EXIT_INPUT, EXIT_USAGE, main
-
-
-@pytest.fixture(scope="module")
-def pair(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("pair")
-    shape = ds.tube(n_along=22, n_around=10)
-    copy, truth = ds.rigid_copy(shape, scale=0.5, random_state=2)
-    src, tgt = folder / "source.off", folder / "target.off"
-    trimesh.Trimesh(shape.vertices, shape.faces, process=False).export(src)
-    trimesh.Trimesh(copy.vertices, copy.faces, process=False).export(tgt)
-    return str(src), str(tgt), truth
 
 
 FAST = ["--reorder", "greedy", "--no-refine"]
@@ -149,7 +137,7 @@ def test_debug_quiet_and_verbose_after_the_command(pair, tmp_path, capsys, monke
     src, tgt, _ = pair
     code, _, err = _run(["match", src, tgt, "-o", str(tmp_path / "a.txt"), "-v", *FAST], capsys)
     assert code == 0
-    assert "matching " in err and "source.off -> target.off [geodesics] done in" in err
+    assert "matching " in err and "source.off -> target.ply [geodesics] done in" in err
     assert "distinct target vertices" in err
     code, _, err = _run(["match", src, tgt, "-o", str(tmp_path / "b.txt"), "-q", *FAST], capsys)
     assert code == 0 and err == ""

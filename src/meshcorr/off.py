@@ -92,6 +92,15 @@ def _check_size(label: str, data: bytes, n_vertices: int, n_faces: int, header_l
                                         "header is wrong")
 
 
+def _next_record(label: str, records, last: int, done: str) -> tuple[int, list[bytes]]:
+    """The next (line number, ASCII tokens); the end of the file here means it is truncated."""
+    try:
+        number, tokens = next(records)
+    except StopIteration:
+        raise _fail(label, last, f"the file ends after {done} its header declares: it is truncated") from None
+    return number, _ascii(label, number, tokens)
+
+
 def parse_off(data: bytes, label: str) -> tuple[np.ndarray, np.ndarray, int, int]:
     """Vertices, triangles, and the polygon and face counts of an ASCII OFF file.
 
@@ -124,13 +133,8 @@ def parse_off(data: bytes, label: str) -> tuple[np.ndarray, np.ndarray, int, int
     vertices = np.empty((n_vertices, 3))
     last = header_line
     for row in range(n_vertices):
-        try:
-            number, tokens = next(records)
-        except StopIteration:
-            raise _fail(label, last, f"the file ends after {row} of the {n_vertices} vertices its header "
-                                     "declares: it is truncated") from None
+        number, tokens = _next_record(label, records, last, f"{row} of the {n_vertices} vertices")
         last = number
-        tokens = _ascii(label, number, tokens)
         if len(tokens) < 3:
             raise _fail(label, number, f"vertex {row} has {len(tokens)} coordinates, not 3 (a truncated line?)")
         try:
@@ -144,13 +148,8 @@ def parse_off(data: bytes, label: str) -> tuple[np.ndarray, np.ndarray, int, int
     triangles: list[list[int]] = []
     n_polygons = 0
     for face in range(n_faces):
-        try:
-            number, tokens = next(records)
-        except StopIteration:
-            raise _fail(label, last, f"the file ends after {face} of the {n_faces} faces its header "
-                                     "declares: it is truncated") from None
+        number, tokens = _next_record(label, records, last, f"{face} of the {n_faces} faces")
         last = number
-        tokens = _ascii(label, number, tokens)
         try:
             arity = int(tokens[0])
             indices = [int(t) for t in tokens[1:1 + arity]]

@@ -47,7 +47,10 @@ def test_icp_undoes_a_smooth_warp():
     assert result.converged and len(result.history) <= 10
     costs = [h["cost"] for h in result.history]
     assert costs[-1] < costs[0]
-    assert all(0.0 <= h["changed"] <= 1.0 for h in result.history)
+    # Many matches change at first, fewer than tol (3 %) when it stops: measured 0.278
+    # falling to 0.015 over 7 iterations.
+    changed = [h["changed"] for h in result.history]
+    assert changed[0] > 0.2 and changed[-1] < 0.03, changed
 
 
 def test_zero_iterations_leave_the_target_unchanged():

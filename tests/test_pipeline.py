@@ -1,5 +1,7 @@
 """End-to-end invariances of meshcorr.match."""
 
+import time
+
 import numpy as np
 import pytest
 import trimesh
@@ -20,9 +22,17 @@ def copy_and_truth(shape):
 
 
 @pytest.fixture(scope="module")
-def result(shape, copy_and_truth):
+def timed_result(shape, copy_and_truth):
+    """The match of the copy and the seconds the call took."""
     copy, _ = copy_and_truth
-    return meshcorr.match((shape.vertices, shape.faces), (copy.vertices, copy.faces), random_state=0)
+    start = time.perf_counter()
+    result = meshcorr.match((shape.vertices, shape.faces), (copy.vertices, copy.faces), random_state=0)
+    return result, time.perf_counter() - start
+
+
+@pytest.fixture(scope="module")
+def result(timed_result):
+    return timed_result[0]
 
 
 def test_rotated_scaled_reindexed_copy_maps_to_the_permutation(result, copy_and_truth):
@@ -30,7 +40,8 @@ def test_rotated_scaled_reindexed_copy_maps_to_the_permutation(result, copy_and_
     np.testing.assert_array_equal(result.map, truth)
 
 
-def test_result_holds_every_stage(result, shape):
+def test_result_holds_every_stage(timed_result, shape):
+    result, seconds = timed_result
     n = shape.n_vertices
     assert result.method == "spectral"
     assert result.map.shape == (n,) and result.map.dtype == np.int64
@@ -42,7 +53,9 @@ def test_result_holds_every_stage(result, shape):
     assert result.runner_up.cost >= result.configuration.cost
     assert result.anchors.shape == (3, 2)
     assert set(result.timings) >= {"load", "geodesics", "embedding", "reorder", "icp", "matching"}
-    assert all(t >= 0 for t in result.timings.values())
+    # The stages are disjoint parts of the call and cover nearly all of it (measured 96-97 %;
+    # the lower bound only catches a wrong unit).
+    assert 0.2 * seconds <= sum(result.timings.values()) <= seconds
     summary = result.summary()
     assert summary["n_mapped"] == n and summary["configuration"]["cost"] == pytest.approx(0.0, abs=1e-9)
 

@@ -4,6 +4,7 @@ import json
 import os
 import subprocess
 import sys
+import threading
 import time
 
 import numpy as np
@@ -224,28 +225,32 @@ def test_prefetch_reraises_the_worker_error_and_cancels_the_worker_after_an_erro
             with prefetch_bases(*poses, 12):
                 pass
 
-    # An error in the block cancels the worker at its next solve: no wait for the whole eigensolve.
+    # An error in the block cancels the worker at its next solve: no wait for the whole eigensolve
+    # (~50 solves). The worker's third solve holds until the cancel is requested, then goes on.
     solves = []
+    holder, ready, reached = [], threading.Event(), threading.Event()
 
     def counting_eigsh(*args, OPinv, **kwargs):
-        def slow_solve(x):
+        def held_solve(x):
             solves.append(1)
-            time.sleep(0.05)
+            if len(solves) == 3:
+                reached.set()
+                assert ready.wait(60.0) and holder[0]._cancel.wait(60.0)  # deadlock guards
             return OPinv.matvec(x)
 
-        return real_eigsh(*args, OPinv=LinearOperator(OPinv.shape, matvec=slow_solve, dtype=float), **kwargs)
+        return real_eigsh(*args, OPinv=LinearOperator(OPinv.shape, matvec=held_solve, dtype=float), **kwargs)
 
     real_eigsh = refine.eigsh
     monkeypatch.setattr(refine, "eigsh", counting_eigsh)
     fresh = [Mesh(m.vertices, m.faces) for m in poses]
-    start = time.perf_counter()
     with pytest.raises(RuntimeError, match="stage failed"):
         with prefetch_bases(*fresh, 12) as prefetch:
-            time.sleep(0.3)
+            holder.append(prefetch)
+            ready.set()
+            assert reached.wait(60.0)
             raise RuntimeError("stage failed")
-    assert time.perf_counter() - start < 1.5  # the full eigensolves take ~50 solves x 0.05 s each
-    assert prefetch._done.is_set()
-    assert 0 < len(solves) < 20
+    assert prefetch._done.is_set()  # leaving the block waited for the worker
+    assert len(solves) == 3  # the solve after the cancel request stopped it
     assert not any(key[0] == "laplace_basis" for mesh in fresh for key in mesh._cache)
 
 

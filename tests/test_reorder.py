@@ -138,3 +138,9 @@ def test_exhaustive_mode_at_k10_recovers_a_known_configuration():
     best = rank_configurations(X, Y[rng.permutation(len(X))], "exhaustive")[0]
     assert best.perm == tuple(perm) and best.signs == tuple(signs)
     assert best.cost == pytest.approx(0.0, abs=1e-12)
+
+
+def test_embeddings_of_different_dimensions_are_refused():
+    X, Y = np.zeros((10, 3)), np.zeros((10, 4))
+    with pytest.raises(ValueError, match="Embeddings have different dimensions: 3 and 4"):
+        rank_configurations(X, Y)

@@ -211,12 +211,6 @@ def test_bad_scalable_options_are_rejected(small_pair, kwargs, message):
 
 # --- large-n matching stages on small inputs ---------------------------------
 
-@pytest.fixture
-def large_paths(monkeypatch):
-    """Send every problem through the large-n (KD-tree) code paths."""
-    monkeypatch.setattr(anchors_module, "EXACT_PAIRS", 0)
-
-
 def _cloud(seed, n1=400, n2=300, h=3):
     rng = np.random.default_rng(seed)
     X, Y = rng.normal(size=(n1, 5)), rng.normal(size=(n2, 5))

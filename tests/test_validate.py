@@ -114,8 +114,9 @@ def test_negative_index():
         validate_mesh(TET_V, f)
 
 
-def test_repeated_vertex_in_face():
-    f = np.vstack([TET_F, [[0, 1, 1]]])
+@pytest.mark.parametrize("face", [[1, 1, 2], [0, 1, 1], [1, 2, 1]])  # each pair of corners
+def test_repeated_vertex_in_face(face):
+    f = np.vstack([TET_F, [face]])
     with pytest.raises(MeshError, match=r"1 degenerate face \(1 with a repeated vertex index, 0 with zero area; face 4\)"):
         validate_mesh(TET_V, f)
 
@@ -282,14 +283,72 @@ def test_long_index_lists_are_cut_after_five():
         validate_mesh(v, TET_F)
 
 
-@pytest.mark.parametrize("n_values", [50, 3_000_000])
-def test_repeated_rows_match_unique_rows_reference(n_values):
-    """The int64-key duplicate test (and its fallback for huge meshes) equals np.unique(axis=0)."""
+def _repeated_rows_reference(rows) -> np.ndarray:
+    """Rows equal to an earlier row, by a dictionary of tuples (no numpy keys, no np.unique)."""
+    seen: set = set()
+    repeated = []
+    for row in map(tuple, rows.tolist()):
+        repeated.append(row in seen)
+        seen.add(row)
+    return np.array(repeated)
+
+
+@pytest.mark.parametrize("n_values", [50, 1_000, 3_000_000])
+def test_repeated_rows_match_a_reference(n_values):
+    """The int64-key duplicate test (and its fallback for huge meshes) against a set of tuples."""
     from meshcorr.validate import _repeated_rows
 
     rng = np.random.default_rng(0)
     rows = np.sort(rng.integers(0, 8, size=(400, 3)), axis=1) * (n_values // 8)
-    _, first, inverse = np.unique(rows, axis=0, return_index=True, return_inverse=True)
-    expected = first[inverse.ravel()] != np.arange(len(rows))
+    expected = _repeated_rows_reference(rows)
     assert expected.sum() > 10
     np.testing.assert_array_equal(_repeated_rows(rows, n_values), expected)
+
+
+def test_repeated_rows_of_a_huge_mesh_do_not_collide():
+    """At 3 million vertices a * n**2 + b * n + c overflows int64: two different rows share a key."""
+    from meshcorr.validate import _repeated_rows
+
+    n = 3_000_000
+    # (a, b, c) with a * n**2 + b * n + c == 2**64, whose int64 key wraps to 0, the key of (0, 0, 0).
+    a, rest = divmod(2**64, n * n)
+    b, c = divmod(rest, n)
+    rows = np.array([[0, 0, 0], [a, b, c], [a, b, c], [1, 2, 3]], dtype=np.int64)
+    assert max(a, b, c) < n
+    with np.errstate(over="ignore"):
+        wrapped = (rows[:, 0] * np.int64(n) + rows[:, 1]) * np.int64(n) + rows[:, 2]
+    assert wrapped[0] == wrapped[1]  # the collision the fallback must avoid
+    np.testing.assert_array_equal(_repeated_rows(rows, n), [False, False, True, False])
+    np.testing.assert_array_equal(_repeated_rows_reference(rows), [False, False, True, False])
+
+
+@pytest.mark.parametrize("vertices, faces, message", [
+    ([[0.0, 0, 0], [1.0, 0], [0, 1.0, 0], [0, 0, 1.0]], TET_F.tolist(),
+     r"vertices must have shape \(n, 3\); got rows of different lengths \(row 1 has 2 entries\)"),
+    ([[0.0, 0, 0], 1.0, [0, 1.0, 0], [0, 0, 1.0]], TET_F.tolist(),
+     r"vertices must have shape \(n, 3\); got rows of different lengths \(row 1 is not a sequence\)"),
+    (TET_V.tolist(), [[0, 2, 1], [0, 1, 3, 2], [1, 2, 3], [0, 3, 2]],
+     r"faces must have shape \(m, 3\); got rows of different lengths \(row 1 has 4 entries\)\. "
+     "faces must be triangles"),
+])
+def test_ragged_lists_raise_a_mesh_error(vertices, faces, message):
+    with pytest.raises(MeshError, match=message):
+        validate_mesh(vertices, faces)
+
+
+def test_ragged_vertex_list_through_match_raises_a_mesh_error():
+    import meshcorr
+
+    ragged = [[0.0, 0, 0], [1.0, 0], [0, 1.0, 0], [0, 0, 1.0]]
+    with pytest.raises(MeshError, match=r"^source: vertices must have shape \(n, 3\); got rows"):
+        meshcorr.match((ragged, TET_F.tolist()), (TET_V, TET_F))
+
+
+@pytest.mark.parametrize("vertices", [
+    np.array([["0", "0", "0"], ["1", "0", "0"], ["0", "1", "0"], ["0", "0", "1"]]),
+    TET_V.astype(np.complex128),
+    np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, None]], dtype=object),
+])
+def test_coordinates_that_are_not_real_numbers(vertices):
+    with pytest.raises(MeshError, match=f"vertex coordinates must be real numbers; got dtype {vertices.dtype}"):
+        validate_mesh(vertices, TET_F)

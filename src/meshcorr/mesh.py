@@ -103,7 +103,7 @@ def as_mesh(obj: MeshLike, *, name: str | None = None, largest_component: bool =
     elif hasattr(obj, "vertices") and hasattr(obj, "faces"):
         vertices, faces = np.asarray(obj.vertices), np.asarray(obj.faces)
     elif isinstance(obj, (tuple, list)) and len(obj) == 2:
-        vertices, faces = np.asarray(obj[0]), np.asarray(obj[1])
+        vertices, faces = obj  # validate_mesh converts them (a ragged list raises MeshError)
     else:
         raise MeshError(
             f"Cannot make a mesh out of {type(obj).__name__}: give a file path, a trimesh.Trimesh, "

@@ -20,7 +20,19 @@ one that the following energies prefer:
   whose legs are swapped under a right upper body (a *partial* mirror) keeps
   distances within each leg but not from a foot to a hand: it is more
   distorted than the right map, which the whole-surface orientation cannot
-  see. The least distorted of the remaining maps is kept.
+  see.
+- **curvature disagreement** (:func:`meshcorr.curvature.curvature_disagreement`):
+  how much the ball-averaged signed mean curvature changes across the map.
+  A person turned half a turn about the long axis (front to back and left
+  to right) keeps the orientation and, a person being thin, nearly every
+  distance, but sends a nose to the back of the head; its curvature
+  disagrees. The map kept is the one of least
+  :math:`\text{distortion} \times \text{curvature}^{3}` (a weighted sum of
+  the two energies' logarithms; the weight 3 was the best of 0-6 on the
+  development pairs, ``benchmarks/RESULTS-robustness-trials.md``, and the
+  orientation threshold the best of 0.5-0.65). Without a reliable
+  orientation the signed curvature is undefined and the distortion alone
+  decides.
 - **regional orientation** (:func:`meshcorr.orientation.regional_orientation`):
   the orientation score of the worst of 12 regions; reported, so that a
   partly mirrored result can be seen in ``--json``.
@@ -40,6 +52,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .curvature import curvature_disagreement
 from .orientation import orientation_score, regional_orientation
 from .symmetry import metric_distortion
 
@@ -47,6 +60,8 @@ from .symmetry import metric_distortion
 ORIENTATION_MIN = 0.6
 #: Seeded source vertices of the metric distortion.
 N_DISTORTION_SOURCES = 24
+#: Exponent of the curvature disagreement in the energy a map is chosen by.
+CURVATURE_POWER = 3
 #: Maps whose landmark error is within this (normalised geodesic distance) of the best one are kept.
 LANDMARK_TOLERANCE = 0.02
 
@@ -64,7 +79,7 @@ class MapCandidate:
         ``"landmarks"``.
     mapping : (n1,) int
         Source vertex -> target vertex, local numbering.
-    orientation, distortion, regional_orientation, landmark_error : float
+    orientation, distortion, curvature, regional_orientation, landmark_error : float
         The energies of the module docstring (NaN where not measured).
     extra : dict
         ``extremity_energy`` for extremity maps.
@@ -74,6 +89,7 @@ class MapCandidate:
     mapping: np.ndarray
     orientation: float = np.nan
     distortion: float = np.nan
+    curvature: float = np.nan
     regional_orientation: float = np.nan
     landmark_error: float = np.nan
     extra: dict = field(default_factory=dict)
@@ -83,7 +99,7 @@ class MapCandidate:
             return None if not np.isfinite(value) else round(float(value), digits)
 
         return {"origin": self.origin, "orientation": rounded(self.orientation),
-                "distortion": rounded(self.distortion, 5),
+                "distortion": rounded(self.distortion, 5), "curvature": rounded(self.curvature),
                 "regional_orientation": rounded(self.regional_orientation),
                 "landmark_error": rounded(self.landmark_error, 5),
                 **{key: rounded(value, 5) for key, value in self.extra.items()}}
@@ -117,6 +133,7 @@ def score_candidates(candidates: list[MapCandidate], source, target, source_geod
         candidate.distortion = metric_distortion(source_geodesics, target_geodesics, mapping, sources, rows)
         if reliable:
             candidate.orientation = orientation_score(source, target, mapping, random_state=random_state)
+            candidate.curvature = curvature_disagreement(source, target, mapping, random_state=random_state)
             candidate.regional_orientation = float(
                 regional_orientation(source, target, mapping, random_state=random_state).min())
         if landmarks is not None:
@@ -139,9 +156,9 @@ def choose_map(candidates: list[MapCandidate], *, reliable: bool
     -------
     chosen : MapCandidate
     alternative : MapCandidate or None
-        The least distorted candidate whose orientation score is on the other
-        side of 0.5 (with an unreliable orientation: the least distorted
-        other candidate); None if there is none.
+        The candidate of least :func:`energy` whose orientation score is on
+        the other side of 0.5 (with an unreliable orientation: the least
+        distorted other candidate); None if there is none.
     """
     pool = list(candidates)
     if all(np.isfinite(c.landmark_error) for c in pool):
@@ -149,9 +166,16 @@ def choose_map(candidates: list[MapCandidate], *, reliable: bool
         pool = [c for c in pool if c.landmark_error <= best + LANDMARK_TOLERANCE]
     if reliable:
         pool = [c for c in pool if c.orientation >= ORIENTATION_MIN] or pool
-    chosen = min(pool, key=lambda c: c.distortion)
+    chosen = min(pool, key=lambda c: energy(c, reliable))
     rest = [c for c in candidates if c is not chosen]
     if reliable:
         rest = [c for c in rest if (c.orientation >= 0.5) != (chosen.orientation >= 0.5)]
-    alternative = min(rest, key=lambda c: c.distortion) if rest else None
+    alternative = min(rest, key=lambda c: energy(c, reliable)) if rest else None
     return chosen, alternative
+
+
+def energy(candidate: MapCandidate, reliable: bool) -> float:
+    """distortion x curvature^3 (module docstring); the distortion alone without a reliable orientation."""
+    if not reliable:
+        return candidate.distortion
+    return candidate.distortion * candidate.curvature ** CURVATURE_POWER

@@ -4,9 +4,10 @@ Every check raises :class:`~meshcorr.errors.MeshError` with a message that
 names the problem, how many elements are affected (with the first few
 offending indices) and the fix. All checks are vectorized numpy / scipy.
 
-The checks run in this order: shapes (and emptiness), finite coordinates,
-face index range, degenerate faces, non-manifold faces / edges / vertices,
-unreferenced vertices and connected components, minimum vertex count.
+The checks run in this order: shapes (ragged lists, emptiness), real and
+finite coordinates, face index range, degenerate faces, non-manifold faces /
+edges / vertices, unreferenced vertices and connected components, minimum
+vertex count.
 """
 
 from __future__ import annotations
@@ -38,10 +39,35 @@ def _plural(count: int, word: str, words: str | None = None) -> str:
     return f"{count} {word if count == 1 else (words or word + 's')}"
 
 
+def _first_bad_row(rows) -> str:
+    """``" (row 1 has 2 entries)"``: the first row of a ragged list whose length is not 3."""
+    index = 0
+    try:
+        for index, row in enumerate(rows):
+            if len(row) != 3:
+                return f" (row {index} has {len(row)} entries)"
+    except TypeError:  # a row that is a number, not a sequence
+        return f" (row {index} is not a sequence)"
+    return ""
+
+
+def _as_array(values, what: str, shape: str, fix: str, name: str) -> np.ndarray:
+    """``np.asarray(values)``; a ragged list (rows of different lengths) raises :class:`MeshError`."""
+    try:
+        return np.asarray(values)
+    except ValueError as error:  # numpy >= 1.24: "inhomogeneous shape"
+        raise MeshError(
+            f"{name}: {what} must have shape {shape}; got rows of different lengths"
+            f"{_first_bad_row(values)}. {fix}"
+        ) from error
+
+
 def _as_arrays(vertices, faces, name: str) -> tuple[np.ndarray, np.ndarray]:
     """Convert to float64 (n, 3) and int64 (m, 3) arrays, checking emptiness and shapes."""
-    vertices = np.asarray(vertices)
-    faces = np.asarray(faces)
+    vertices = _as_array(vertices, "vertices", "(n, 3)",
+                         "Pass one row of x, y, z coordinates per vertex.", name)
+    faces = _as_array(faces, "faces", "(m, 3)",
+                      "faces must be triangles; triangulate polygons first.", name)
     if vertices.size == 0 or faces.size == 0:
         what = "no vertices" if vertices.size == 0 else "no faces"
         raise MeshError(
@@ -282,9 +308,10 @@ def validate_mesh(
     Raises
     ------
     MeshError
-        If the mesh is empty, not (n, 3) / (m, 3), has NaN or inf coordinates,
-        out-of-range indices, degenerate or duplicate faces, non-manifold edges
-        or vertices, unreferenced vertices or several components (unless
+        If the mesh is empty, not (n, 3) / (m, 3) (ragged lists included), has
+        coordinates that are not real numbers or are NaN or inf, out-of-range
+        indices, degenerate or duplicate faces, non-manifold edges or vertices,
+        unreferenced vertices or several components (unless
         ``largest_component``), or fewer than ``min_vertices`` vertices.
     ParameterError
         If ``min_vertices`` is not an int >= 1.

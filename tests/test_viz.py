@@ -101,7 +101,7 @@ def test_show_with_truth_adds_a_row_and_error_mode(pair, tmp_path, capsys):
     rows = tmp_path / "rows.png"
     assert main(["show", str(pair["bent"]), str(pair["target"]), str(wrong), "-o", str(rows),
                  "--gt", str(pair["same_map"])]) == 0
-    assert "mean 0.0000" not in capsys.readouterr().out.splitlines()[-1]
+    assert "mean 0.0000" not in capsys.readouterr().err.splitlines()[-1]  # status lines go to stderr
     image = _read_png(rows)
     middle = image.shape[0] // 2
     assert _differing(image[:middle]) > 0.1

@@ -117,4 +117,4 @@ def test_console_script_runs_as_a_process(pair, tmp_path):
     np.testing.assert_array_equal(np.loadtxt(out, dtype=np.int64), truth)
     bad = subprocess.run([sys.executable, "-m", "meshcorr", "match", src, "nope.obj", "-o", str(out)],
                          capture_output=True, text=True, timeout=120)
-    assert bad.returncode == 2 and "Traceback" not in bad.stderr
+    assert bad.returncode == 3 and "Traceback" not in bad.stderr  # bad input data

@@ -47,7 +47,7 @@ def test_evaluate_perfect_map_text(pair, capsys):
 def test_evaluate_json_with_vts_and_sym(pair, capsys):
     folder, src, tgt = pair
     code = main(["evaluate", src, tgt, str(folder / "shifted.txt"), "--gt", str(folder / "a.vts"),
-                 str(folder / "b.vts"), "--sym", str(folder / "b.sym.vts"), "--json",
+                 "--gt", str(folder / "b.vts"), "--sym", str(folder / "b.sym.vts"), "--json",
                  "--thresholds", "0.5,1"])
     assert code == 0
     report = json.loads(capsys.readouterr().out)
@@ -69,16 +69,18 @@ def test_evaluate_curve_png(pair, tmp_path):
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size < 150_000
 
 
-@pytest.mark.parametrize("change, message", [
-    (lambda f: [str(f / "missing.txt"), "--gt", "identity"], "No such file"),
-    (lambda f: [str(f / "short.txt"), "--gt", str(f / "truth.txt")], "has 127 entries"),
-    (lambda f: [str(f / "truth.txt"), "--gt", str(f / "a.vts")], "indexes one mesh only"),
-    (lambda f: [str(f / "truth.txt"), "--gt", str(f / "a.vts"), str(f / "nope.vts")], "No such ground-truth"),
-    (lambda f: [str(f / "truth.txt"), "--gt", "identity", "--thresholds", "x"], "--thresholds"),
+@pytest.mark.parametrize("change, message, code", [
+    (lambda f: [str(f / "missing.txt"), "--gt", "identity"], "No such file", 3),
+    (lambda f: [str(f / "short.txt"), "--gt", str(f / "truth.txt")], "has 127 entries", 2),
+    (lambda f: [str(f / "truth.txt"), "--gt", str(f / "a.vts")], "indexes one mesh only", 3),
+    (lambda f: [str(f / "truth.txt"), "--gt", str(f / "a.vts"), "--gt", str(f / "nope.vts")],
+     "No such ground-truth", 3),
+    (lambda f: [str(f / "truth.txt"), "--gt", "identity", "--thresholds", "x"], "--thresholds", 2),
 ])
-def test_evaluate_errors_exit_2_with_one_line(pair, capsys, change, message):
+def test_evaluate_errors_exit_2_or_3_with_one_line(pair, capsys, change, message, code):
+    """Bad usage exits 2, bad input data 3."""
     folder, src, tgt = pair
-    assert main(["evaluate", src, tgt, *change(folder)]) == 2
+    assert main(["evaluate", src, tgt, *change(folder)]) == code
     err = capsys.readouterr().err
     assert err.startswith("meshcorr: error:") and message in err and err.count("\n") == 1
 
@@ -115,7 +117,7 @@ def test_bench_writes_tables_and_resumes(dataset, tmp_path, monkeypatch, capsys)
     monkeypatch.setattr(benchmark, "run_method", fake_method(calls, fail_on={"fig0"}))
     out = tmp_path / "out"
     args = ["bench", str(dataset), "--out", str(out), "--no-plot", "-k", "5", "--set", "spectral:reorder='greedy'"]
-    assert main(args) == 0
+    assert main(args) == 4  # one run failed
     captured = capsys.readouterr()
     assert "| spectral | 2 | 1 |" in captured.out and "warning" not in captured.err and "1 (pair, method) runs failed" in captured.err
     rows = list(csv.DictReader((out / "results.csv").open()))
@@ -127,9 +129,9 @@ def test_bench_writes_tables_and_resumes(dataset, tmp_path, monkeypatch, capsys)
 
     before = (out / "results.csv").read_text()
     calls.clear()
-    assert main(args) == 0  # restart: nothing recomputed, rows unchanged
+    assert main(args) == 4  # restart: nothing recomputed, rows unchanged, the failure still counted
     assert calls == [] and (out / "results.csv").read_text() == before
-    assert main(args + ["--retry-failed"]) == 0
+    assert main(args + ["--retry-failed"]) == 4
     assert [c[0] for c in calls] == ["fig0"]
     assert main(["bench", str(dataset), "--out", str(out), "--no-plot", "-q"]) == 2  # other settings
     assert "other settings" in capsys.readouterr().err

@@ -88,7 +88,7 @@ def test_show_with_truth_adds_a_row_and_error_mode(pair, tmp_path, capsys):
     err = tmp_path / "err.png"
     assert main(["show", *_args(pair, "-o", one)]) == 0
     assert main(["show", *_args(pair, "-o", two, "--gt", pair["gt"])]) == 0
-    assert "mean 0.0000" in capsys.readouterr().out  # the map is the truth
+    assert "mean 0.0000" in capsys.readouterr().err  # the map is the truth
     assert _read_png(two).shape[0] > 1.7 * _read_png(one).shape[0]
     bottom = _read_png(two)[_read_png(two).shape[0] // 2:]
     assert _ink(bottom[:, : bottom.shape[1] // 2]) > 0.05
@@ -101,7 +101,7 @@ def test_show_with_truth_adds_a_row_and_error_mode(pair, tmp_path, capsys):
     rows = tmp_path / "rows.png"
     assert main(["show", str(pair["bent"]), str(pair["target"]), str(wrong), "-o", str(rows),
                  "--gt", str(pair["same_map"])]) == 0
-    assert "mean 0.0000" not in capsys.readouterr().out.splitlines()[-1]
+    assert "mean 0.0000" not in capsys.readouterr().err.splitlines()[-1]  # status lines go to stderr
     image = _read_png(rows)
     middle = image.shape[0] // 2
     assert _differing(image[:middle]) > 0.1
@@ -260,7 +260,7 @@ def test_transfer_errors_are_one_line(pair, tmp_path, capsys):
 def test_embed_draws_eigenvectors(pair, tmp_path, capsys):
     out = tmp_path / "embed.png"
     assert main(["embed", str(pair["source"]), "-o", str(out), "-n", "2"]) == 0
-    line = capsys.readouterr().out
+    line = capsys.readouterr().err
     values = [float(v) for v in line.split("eigenvalues:")[1].split(",")]
     assert len(values) == 2 and values[0] >= values[1] > 0
     image = _read_png(out)
@@ -273,5 +273,5 @@ def test_embed_draws_eigenvectors(pair, tmp_path, capsys):
 def test_embed_errors_are_one_line(pair, tmp_path, capsys):
     assert main(["embed", str(pair["source"]), "-o", str(tmp_path / "a.png"), "-n", "0"]) == 2
     assert "n_eigenvectors" in capsys.readouterr().err
-    assert main(["embed", str(tmp_path / "none.off"), "-o", str(tmp_path / "b.png")]) == 2
+    assert main(["embed", str(tmp_path / "none.off"), "-o", str(tmp_path / "b.png")]) == 3  # bad input data
     assert capsys.readouterr().err.startswith("meshcorr: error:")

@@ -47,6 +47,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
+from ._threads import kdtree_query
 from .errors import ParameterError
 
 RowsFn = Callable[[int], np.ndarray]
@@ -222,7 +223,7 @@ def embedding_neighbours(X: np.ndarray, Y: np.ndarray, k: int = N_CANDIDATES) ->
         once and pass it to both as ``neighbours``.
     """
     k = min(int(k), len(Y))
-    Z, J = cKDTree(Y).query(X, k=k, workers=-1)
+    Z, J = kdtree_query(cKDTree(Y), X, k=k)
     return Z.reshape(len(X), k), J.reshape(len(X), k)
 
 
@@ -252,7 +253,7 @@ def _candidate_matching(X, Y, F1, F2, neighbours: Neighbours) -> tuple[np.ndarra
         J = nearest[rows]
         if combined is not None:
             tree, points, kk = combined
-            J = np.hstack([J, tree.query(points[rows], k=kk, eps=3.0, workers=-1)[1].reshape(len(rows), kk)])
+            J = np.hstack([J, kdtree_query(tree, points[rows], k=kk, eps=3.0)[1].reshape(len(rows), kk)])
         C = _pair_cost(X, Y, F1, F2, np.repeat(rows, width), J.ravel()).reshape(len(rows), width)
         cost[rows] = C.min(axis=1)
         mapping[rows] = np.where(C == cost[rows, None], J, n2).min(axis=1)  # ties: lowest index

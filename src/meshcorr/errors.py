@@ -20,6 +20,18 @@ class ParameterError(MeshcorrError, ValueError):
     """An option has an invalid value."""
 
 
+class InputError(ParameterError):
+    """An input data file other than a mesh (vertex map, ground truth) cannot be used.
+
+    A :class:`ParameterError` too, for code written before the CLI told bad
+    data (exit code 3) apart from bad usage (exit code 2).
+    """
+
+
+class OutputError(ParameterError):
+    """An output cannot be written where asked (no folder, no permission, an input's path)."""
+
+
 class PreparedShapeError(MeshcorrError, ValueError):
     """A prepared shape (or cache file) was made for another mesh, other settings or another version."""
 

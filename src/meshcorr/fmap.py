@@ -38,7 +38,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._params import check_int
-from .errors import ParameterError
+from .errors import InputError, ParameterError
 from .mesh import Mesh
 from .refine import _nearest_rows, laplace_basis
 
@@ -131,7 +131,7 @@ class FunctionalMap:
 
         Raises
         ------
-        ParameterError
+        InputError
             If the file is missing, unreadable, lacks an array or its shapes disagree.
         """
         from .io import read_npz
@@ -139,12 +139,12 @@ class FunctionalMap:
         arrays = read_npz(path, "a functional map file")  # ParameterError if missing or unreadable
         missing = [name for name in cls.__dataclass_fields__ if name not in arrays]
         if missing:
-            raise ParameterError(f"{path} lacks the array {missing[0]!r}; a functional map file holds "
+            raise InputError(f"{path} lacks the array {missing[0]!r}; a functional map file holds "
                                  f"{', '.join(cls.__dataclass_fields__)}.")
         arrays = {name: arrays[name] for name in cls.__dataclass_fields__}
         C, phi_s, phi_t = arrays["C"], arrays["source_basis"], arrays["target_basis"]
         if C.ndim != 2 or phi_s.ndim != 2 or phi_t.ndim != 2 or C.shape != (phi_s.shape[1], phi_t.shape[1]):
-            raise ParameterError(f"{path}: C has shape {C.shape} but the bases have shapes {phi_s.shape} "
+            raise InputError(f"{path}: C has shape {C.shape} but the bases have shapes {phi_s.shape} "
                                  f"and {phi_t.shape}; C must be (source basis size, target basis size).")
         return cls(**arrays)
 

@@ -28,7 +28,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .errors import ParameterError
+from .errors import InputError
 
 __all__ = ["GroundTruth", "identity_truth", "load_ground_truth", "read_pairs", "read_vts"]
 
@@ -55,7 +55,7 @@ class GroundTruth:
         source = np.array(self.source, dtype=np.int64).reshape(-1)
         target = np.array(self.target, dtype=np.int64).reshape(-1)
         if source.shape != target.shape:
-            raise ParameterError(
+            raise InputError(
                 f"A ground truth needs as many source as target vertices; got {source.size} "
                 f"and {target.size}{self._where()}."
             )
@@ -76,7 +76,7 @@ class GroundTruth:
             bad = (values < 0) | (values >= n)
             if bad.any():
                 first = int(np.flatnonzero(bad)[0])
-                raise ParameterError(
+                raise InputError(
                     f"Ground truth pair {first} names {side} vertex {int(values[first])}, but the "
                     f"{side} mesh has {n} vertices (0-based indices 0..{n - 1}){self._where()}. "
                     "Check that the ground truth belongs to these meshes."
@@ -93,7 +93,7 @@ def identity_truth(n_source: int, n_target: int) -> GroundTruth:
         If the vertex counts differ: the identity cannot be the truth then.
     """
     if n_source != n_target:
-        raise ParameterError(
+        raise InputError(
             f"The identity ground truth needs meshes with equal vertex counts; the source has "
             f"{n_source} and the target {n_target}. Give a .vts pair or a file of vertex pairs."
         )
@@ -103,16 +103,16 @@ def identity_truth(n_source: int, n_target: int) -> GroundTruth:
 
 def _read_lines(path: Path) -> list[tuple[int, str]]:
     if not path.is_file():
-        raise ParameterError(f"No such ground-truth file: {path}" if not path.exists()
+        raise InputError(f"No such ground-truth file: {path}" if not path.exists()
                              else f"Not a file: {path}")
     try:
         text = path.read_text(encoding="ascii")
     except UnicodeDecodeError as exc:
-        raise ParameterError(f"{path}: a ground-truth file must be plain text.") from exc
+        raise InputError(f"{path}: a ground-truth file must be plain text.") from exc
     lines = [(number, line.split("#", 1)[0].strip()) for number, line in enumerate(text.splitlines(), 1)]
     lines = [(number, line) for number, line in lines if line]
     if not lines:
-        raise ParameterError(f"{path}: the ground-truth file is empty.")
+        raise InputError(f"{path}: the ground-truth file is empty.")
     return lines
 
 
@@ -139,18 +139,18 @@ def read_vts(path, n_vertices: int | None = None) -> np.ndarray:
     path = Path(path)
     values = []
     for number, line in _read_lines(path):
-        if not re.fullmatch(r"[+-]?\d+", line):
-            raise ParameterError(f"{path}, line {number}: a .vts file holds one integer per line; "
-                                 f"got {line[:40]!r}.")
+        if not re.fullmatch(r"[+-]?\d{1,18}", line):  # 18 digits: always an int64
+            raise InputError(f"{path}, line {number}: a .vts file holds one integer per line; "
+                             f"got {line[:40]!r}.")
         values.append(int(line))
     vts = np.array(values, dtype=np.int64)
     if vts.min() < 1:
-        raise ParameterError(
+        raise InputError(
             f"{path} holds index {int(vts.min())}, but .vts indices are 1-based (>= 1). "
             "If the file is 0-based, pass it as a file of vertex pairs instead."
         )
     if n_vertices is not None and vts.max() > n_vertices:
-        raise ParameterError(
+        raise InputError(
             f"{path} holds index {int(vts.max())} (1-based), but its mesh has {n_vertices} "
             "vertices. Check that the .vts file belongs to this mesh."
         )
@@ -181,15 +181,15 @@ def read_pairs(path) -> GroundTruth:
     rows = []
     for number, line in _read_lines(path):
         fields = [f for f in re.split(r"[\s,:;]+", line) if f]
-        if not 1 <= len(fields) <= 2 or not all(re.fullmatch(r"[+-]?\d+", f) for f in fields):
-            raise ParameterError(f"{path}, line {number}: expected a 0-based vertex pair 'i j' "
-                                 f"(or one index per line); got {line[:40]!r}.")
+        if not 1 <= len(fields) <= 2 or not all(re.fullmatch(r"[+-]?\d{1,18}", f) for f in fields):
+            raise InputError(f"{path}, line {number}: expected a 0-based vertex pair 'i j' "
+                             f"(or one index per line); got {line[:40]!r}.")
         rows.append((number, [int(f) for f in fields]))
     widths = {len(values) for _, values in rows}
     if len(widths) > 1:
         odd = next(number for number, values in rows if len(values) != len(rows[0][1]))
-        raise ParameterError(f"{path}, line {odd}: mixes one- and two-column lines; use one index "
-                             "per line (a dense map) or one pair 'i j' per line throughout.")
+        raise InputError(f"{path}, line {odd}: mixes one- and two-column lines; use one index "
+                         "per line (a dense map) or one pair 'i j' per line throughout.")
     table = np.array([values for _, values in rows], dtype=np.int64)
     if table.shape[1] == 1:
         target = table[:, 0]
@@ -227,14 +227,14 @@ def load_ground_truth(spec: str | os.PathLike | Sequence[str | os.PathLike], *, 
     if len(items) == 2:
         paths = [Path(item) for item in items]
         if not all(p.suffix.lower() == ".vts" for p in paths):
-            raise ParameterError(
+            raise InputError(
                 "Two ground-truth files must both be .vts files (source, then target); got "
                 f"{items[0]} and {items[1]}. A file of vertex pairs is given alone."
             )
         vts_source = read_vts(paths[0], n_source)
         vts_target = read_vts(paths[1], n_target)
         if vts_source.size != vts_target.size:
-            raise ParameterError(
+            raise InputError(
                 f"The .vts files must have one line per template sample each; {paths[0]} has "
                 f"{vts_source.size} lines and {paths[1]} has {vts_target.size}. "
                 "Check that both come from the same dataset."
@@ -243,12 +243,12 @@ def load_ground_truth(spec: str | os.PathLike | Sequence[str | os.PathLike], *, 
     if len(items) == 1:
         path = Path(items[0])
         if path.suffix.lower() == ".vts":
-            raise ParameterError(
+            raise InputError(
                 f"A .vts file ({path}) indexes one mesh only: give the source's and the "
                 "target's .vts files together (e.g. --gt A.vts B.vts)."
             )
         return read_pairs(path).check(n_source, n_target)
-    raise ParameterError(
+    raise InputError(
         "A ground truth is 'identity', two .vts files or one file of vertex pairs; "
         f"got {len(items)} items."
     )

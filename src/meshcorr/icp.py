@@ -21,14 +21,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ._params import check_float, check_int
-from ._threads import single_blas_thread
+from ._threads import kdtree_query, single_blas_thread
 from .tps import fit_tps, mean_pairwise_distance
-
-
-def _workers(n_queries: int) -> int:
-    """KD-tree query threads: all cores from 10 000 queries on; one below, where starting
-    threads costs more than it saves (1000 queries in 5-d: 0.8 ms on one thread, 1.5 ms on all)."""
-    return -1 if n_queries >= 10_000 else 1
 
 
 @dataclass
@@ -122,7 +116,7 @@ def _icp(X, Y, rng, *, max_iter, n_control, anneal, tol, rtol, random_state) -> 
     smoothing = mean_pairwise_distance(np.concatenate([X, Y]), random_state=random_state)
 
     warped = Y.copy()
-    dist, matches = cKDTree(warped).query(X, workers=_workers(len(X)))
+    dist, matches = kdtree_query(cKDTree(warped), X)
     result = ICPResult(warped=warped, matches=matches)
     for iteration in range(1, max_iter + 1):
         # One pair per target point: the closest of the control points hitting it.
@@ -136,7 +130,7 @@ def _icp(X, Y, rng, *, max_iter, n_control, anneal, tol, rtol, random_state) -> 
         spline = fit_tps(Y[c_match[pairs]], X[control[pairs]], smoothing)
         warped = spline(Y)
         result.spline = spline
-        new_dist, new_matches = cKDTree(warped).query(X, workers=_workers(len(X)))
+        new_dist, new_matches = kdtree_query(cKDTree(warped), X)
         changed = float(np.mean(new_matches != matches))
         gain = (dist.mean() - new_dist.mean()) / max(dist.mean(), 1e-300)
         result.history.append({"iteration": iteration, "cost": float(dist.mean()),
@@ -157,6 +151,6 @@ def _subset_icp(X, Y, rng, *, max_points, random_state, **options) -> ICPResult:
     ys = np.sort(rng.choice(len(Y), size=min(max_points, len(Y)), replace=False))
     result = _icp(X[xs], Y[ys], rng, random_state=random_state, **options)
     warped = Y.copy() if result.spline is None else result.spline(Y)
-    matches = cKDTree(warped).query(X, workers=_workers(len(X)))[1]
+    matches = kdtree_query(cKDTree(warped), X)[1]
     return ICPResult(warped=warped, matches=matches, history=result.history, converged=result.converged,
                      spline=result.spline)

@@ -1,26 +1,40 @@
 """Read and write meshes and vertex maps.
 
-Meshes are read with trimesh without processing, so vertex ``i`` of the file
-is vertex ``i`` of the arrays (correspondences are reported by vertex index).
-Every file is written atomically: to a temporary file in the same directory,
-then moved over the target with :func:`os.replace`.
+Meshes are read without processing, so vertex ``i`` of the file is vertex
+``i`` of the arrays (correspondences are reported by vertex index): OFF by
+:mod:`meshcorr.off`, which checks every record against the header, the other
+formats by trimesh after the checks of :func:`read_mesh`. Every file is
+written atomically: to a temporary file in the same directory, then moved
+over the target with :func:`os.replace`; :func:`check_outputs` refuses
+output paths that cannot be written (or are inputs) before any work, and
+:func:`staged_writes` moves several outputs into place only once all are
+written.
 """
 
 from __future__ import annotations
 
+import io
 import os
 import re
 import secrets
+import stat
 import warnings
+from contextlib import contextmanager
+from contextvars import ContextVar
 from pathlib import Path
 from typing import BinaryIO, Callable
 
 import numpy as np
-import trimesh
 
-from meshcorr.errors import MeshError, MeshWarning, ParameterError
+from meshcorr._interrupt import deferred_interrupt
 
-__all__ = ["SUPPORTED_FORMATS", "atomic_write", "read_map", "read_mesh", "write_map", "write_mesh"]
+with deferred_interrupt():  # trimesh's guards around its optional imports catch BaseException
+    import trimesh
+from meshcorr.errors import InputError, MeshError, MeshWarning, OutputError, ParameterError
+from meshcorr.off import parse_off
+
+__all__ = ["SUPPORTED_FORMATS", "atomic_write", "check_outputs", "read_map", "read_mesh", "staged_writes",
+           "write_map", "write_mesh"]
 
 #: File extensions read_mesh and write_mesh understand, and their format names.
 SUPPORTED_FORMATS = {".off": "OFF", ".obj": "OBJ", ".ply": "PLY", ".stl": "STL"}
@@ -34,33 +48,8 @@ def _int_or_none(text) -> int | None:
         return None
 
 
-def _off_header(data: bytes) -> tuple[int | None, int | None, int]:
-    """Declared (vertex count, face count) of an OFF file and the offset after the header."""
-    tokens: list[bytes] = []
-    offset = 0
-    for line in data[:65536].splitlines(keepends=True):
-        offset += len(line)
-        tokens.extend(line.split(b"#", 1)[0].split())
-        if tokens and tokens[0].endswith(b"OFF"):  # OFF, COFF, NOFF, "OFF 6 2 0", ...
-            if len(tokens) >= 4:
-                return _int_or_none(tokens[1]), _int_or_none(tokens[2]), offset
-        elif len(tokens) >= 3:  # header without the OFF keyword
-            return _int_or_none(tokens[0]), _int_or_none(tokens[1]), offset
-    return None, None, 0
-
-
-def _off_polygons(data: bytes, n_vertices: int, offset: int) -> int:
-    """Number of face records with more than 3 sides in an ASCII OFF body."""
-    lines = (l.split(b"#", 1)[0].split() for l in data[offset:].splitlines())
-    records = [l for l in lines if l][n_vertices:]
-    return sum(1 for rec in records if (_int_or_none(rec[0]) or 0) > 3)
-
-
 def _declared_counts(data: bytes, fmt: str) -> tuple[int | None, int | None]:
     """(vertex records, face records) a file declares, read cheaply as text; None if unknown."""
-    if fmt == "OFF":
-        n_v, n_f, _ = _off_header(data)
-        return n_v, n_f
     if fmt == "OBJ":
         return (
             len(re.findall(rb"^v[ \t]", data, flags=re.MULTILINE)),
@@ -78,14 +67,12 @@ def _declared_counts(data: bytes, fmt: str) -> tuple[int | None, int | None]:
 
 
 def _count_polygons(data: bytes, fmt: str, n_vertices: int | None) -> int | None:
-    """Exact number of faces with more than 3 sides, where cheap to find (OBJ, OFF)."""
+    """Exact number of faces with more than 3 sides, where cheap to find (OBJ)."""
     if fmt == "OBJ":
         return sum(
             1 for rec in re.findall(rb"^f[ \t]+([^\n]*)", data, flags=re.MULTILINE)
             if len(rec.split(b"#", 1)[0].split()) > 3
         )
-    if fmt == "OFF" and n_vertices is not None:
-        return _off_polygons(data, n_vertices, _off_header(data)[2])
     return None
 
 
@@ -108,29 +95,82 @@ def _read_plain_off(data: bytes) -> tuple[np.ndarray, np.ndarray] | None:
     try:
         vertices = np.array(tokens[4:4 + 3 * n_v], dtype=np.float64).reshape(n_v, 3)
         records = np.array(tokens[4 + 3 * n_v:], dtype=np.int64).reshape(n_f, 4)
-    except ValueError:
+    except (ValueError, OverflowError):  # the strict reader says where
         return None
-    if (records[:, 0] != 3).any():
-        return None
-    return vertices, np.ascontiguousarray(records[:, 1:])
+    faces = np.ascontiguousarray(records[:, 1:])
+    if (records[:, 0] != 3).any() or not np.isfinite(vertices).all() or faces.min() < 0 or faces.max() >= n_v:
+        return None  # the strict reader says where the problem is
+    return vertices, faces
+
+
+def _text(data: bytes, label: str, fmt: str) -> bytes:
+    """A text format's bytes as UTF-8: Latin-1 (any byte) where they are not UTF-8 already.
+
+    trimesh would guess the encoding of non-UTF-8 text with charset_normalizer,
+    an optional dependency; numbers and keywords are ASCII in any case.
+    """
+    if b"\x00" in data:
+        raise MeshError(f"{label}: holds NUL bytes, so it is not a {fmt} text file (a binary file "
+                        "with the wrong extension?). Check the file and its extension.")
+    try:
+        data.decode("utf-8")
+        return data
+    except UnicodeDecodeError:
+        return data.decode("latin-1").encode("utf-8")
+
+
+def _check_obj(data: bytes, label: str) -> None:
+    """Every ``f`` record of an OBJ file lists at least three vertices (else: truncated)."""
+    for match in re.finditer(rb"^f([ \t][^\r\n]*)?$", data, flags=re.MULTILINE):
+        refs = (match.group(1) or b"").split(b"#", 1)[0].split()
+        if len(refs) < 3:
+            line = data.count(b"\n", 0, match.start()) + 1
+            raise MeshError(f"{label}, line {line}: a face lists {len(refs)} vertices; a face needs at "
+                            "least 3 (is the file truncated?). Re-export the mesh or repair the line.")
+
+
+def _check_binary_formats(data: bytes, label: str, fmt: str) -> bytes:
+    """The data trimesh gets for PLY and STL, refused early where it is neither binary nor text of the format."""
+    if fmt == "PLY":
+        if not data.startswith(b"ply") or b"end_header" not in data[:65536]:
+            raise MeshError(f"{label}: not a PLY file (it does not start with 'ply' and a header ending in "
+                            "'end_header'). Check the file and its extension.")
+        return data
+    # STL: binary if the size matches the triangle count of the 84-byte header, else ASCII text.
+    if len(data) >= 84 and len(data) == 84 + 50 * int.from_bytes(data[80:84], "little"):
+        return data
+    if not data.lstrip()[:5].lower() == b"solid":
+        raise MeshError(f"{label}: neither a binary STL (its size does not match the triangle count in its "
+                        "header: truncated?) nor an ASCII STL (starting with 'solid'). "
+                        "Re-export the mesh.")
+    return _text(data, label, fmt)
 
 
 def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Read a triangle mesh from an OFF, OBJ, PLY or STL file, keeping vertex order.
 
-    Vertices are neither merged nor reordered (trimesh ``process=False``; for
-    OBJ also ``maintain_order=True`` so texture coordinates do not split
-    vertices), so vertex ``i`` of the file is row ``i`` of ``vertices``.
-    The exception is STL, which stores three unshared vertices per triangle:
-    there duplicate vertices are merged, as an STL file has no vertex order.
-    Polygons are triangulated by trimesh; a :class:`MeshWarning` says so.
+    Vertices are neither merged nor reordered (OFF by :func:`meshcorr.off.parse_off`;
+    the other formats by trimesh with ``process=False``, for OBJ also
+    ``maintain_order=True`` so texture coordinates do not split vertices),
+    so vertex ``i`` of the file is row ``i`` of ``vertices``. The exception
+    is STL, which stores three unshared vertices per triangle: there
+    duplicate vertices are merged, as an STL file has no vertex order.
+
+    The input rules (README, "Reading meshes: input rules"): the header
+    counts of OFF and PLY are checked against the data and each face's
+    arity against its indices (OFF: every record; OBJ: faces of fewer than
+    three vertices); text may be in any ASCII-compatible encoding (bytes
+    that are not UTF-8 are read as Latin-1, in comments say); polygons are
+    triangulated with a :class:`MeshWarning`. Everything else that does not
+    fit is refused with the file, the line where it applies and the fix.
 
     Parameters
     ----------
     path : str or os.PathLike
         The mesh file; its extension selects the format.
     name : str, optional
-        How messages refer to the mesh; defaults to the path.
+        How messages refer to the mesh (followed by the path unless it holds
+        the file name); defaults to the path.
 
     Returns
     -------
@@ -143,8 +183,8 @@ def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]
     Raises
     ------
     MeshError
-        If the file is missing, empty, of an unsupported format, cannot be
-        parsed, holds several separate geometries or no faces.
+        If the file is missing, empty, of an unsupported format, truncated,
+        cannot be parsed, holds several separate geometries or no faces.
 
     Warns
     -----
@@ -153,24 +193,47 @@ def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]
         vertices used by no face were dropped from a textured OBJ.
     """
     path = Path(path)
-    label = name or str(path)
+    # Messages name the file even where the caller's name is a role ("source").
+    label = name if name and path.name in name else f"{name} {path}" if name else str(path)
     if not path.is_file():
-        raise MeshError(f"No such file: {path}" if not path.exists() else f"Not a file: {path}")
+        which = f" ({name})" if name and name != str(path) else ""
+        raise MeshError(f"No such file: {path}{which}. Check the path." if not path.exists()
+                        else f"Not a file: {path}{which}; give a mesh file.")
     fmt = SUPPORTED_FORMATS.get(path.suffix.lower())
     if fmt is None:
         raise MeshError(
             f"Unsupported mesh format '{path.suffix or '(no extension)'}' for {path}; "
             f"supported: {_SUPPORTED_LIST}. Convert the file first (e.g. in MeshLab)."
         )
-    data = path.read_bytes()
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise MeshError(f"{label}: cannot be read ({exc.strerror}). Check its permissions.") from exc
     if not data or data.isspace():
         raise MeshError(f"File is empty: {path}. Check that it was written completely.")
-    plain = _read_plain_off(data) if fmt == "OFF" else None
-    if plain is not None:
-        return plain
+    if fmt == "OFF":
+        plain = _read_plain_off(data)
+        if plain is not None:
+            return plain
+        vertices, faces, n_polygons, n_records = parse_off(data, label)
+        if not len(faces):
+            raise MeshError(f"{label}: the file contains no triangle faces (a point cloud?). "
+                            "meshcorr needs a triangle mesh.")
+        if n_polygons:
+            _warn_polygons(label, f"{n_polygons} polygonal faces", n_records, len(faces))
+        return vertices, faces
+    if fmt == "OBJ":
+        data = _text(data, label, fmt)
+        _check_obj(data, label)
+    else:
+        data = _check_binary_formats(data, label, fmt)
     options = {"maintain_order": True, "skip_materials": True} if fmt == "OBJ" else {}
     try:
-        scene = trimesh.load(path, file_type=fmt.lower(), process=False, force="scene", **options)
+        # trimesh's parsers catch BaseException in places (fast path, then a fallback): a
+        # Ctrl-C there would be swallowed, so it is delivered once the parse ends.
+        with deferred_interrupt():
+            scene = trimesh.load(io.BytesIO(data), file_type=fmt.lower(), process=False, force="scene",
+                                 **options)
     except Exception as exc:  # trimesh raises many types on corrupt input
         raise MeshError(
             f"{label}: the file could not be parsed as {fmt} ({type(exc).__name__}: {exc}). "
@@ -192,21 +255,25 @@ def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]
         mesh.merge_vertices()
     vertices = np.array(mesh.vertices, dtype=np.float64)
     faces = np.array(mesh.faces, dtype=np.int64)
+    if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3:
+        raise MeshError(f"{label}: the file could not be parsed as a 3-D triangle mesh (vertices of shape "
+                        f"{vertices.shape}, faces of shape {faces.shape}; a vertex line with two coordinates?). "
+                        f"Check that it is a valid {fmt} file, e.g. by opening it in MeshLab.")
+    if not np.isfinite(vertices).all():
+        row = int(np.flatnonzero(~np.isfinite(vertices).all(axis=1))[0])
+        raise MeshError(f"{label}: vertex {row} has a non-finite coordinate (nan or inf). "
+                        "Repair or re-export the mesh.")
     if fmt == "STL":
         return vertices, faces
 
     n_vertex_records, n_face_records = _declared_counts(data, fmt)
     if n_face_records is not None and len(faces) > n_face_records:
         n_polygons = _count_polygons(data, fmt, n_vertex_records)
-        what = f"{n_polygons} polygonal faces" if n_polygons else "polygonal faces"
-        warnings.warn(
-            MeshWarning(
-                f"{label}: {what} with more than 3 sides were triangulated "
-                f"({n_face_records} faces in the file became {len(faces)} triangles). "
-                "Triangulate the mesh yourself to control how."
-            ),
-            stacklevel=2,
-        )
+        _warn_polygons(label, f"{n_polygons} polygonal faces" if n_polygons else "polygonal faces",
+                       n_face_records, len(faces))
+    if n_face_records is not None and fmt == "PLY" and len(faces) < n_face_records:
+        raise MeshError(f"{label}: the header declares {n_face_records} faces but {len(faces)} were read: "
+                        "the file is truncated or malformed. Re-export the mesh.")
     if n_vertex_records is not None and len(vertices) != n_vertex_records:
         if fmt == "OBJ" and len(vertices) < n_vertex_records:
             warnings.warn(
@@ -225,13 +292,124 @@ def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]
     return vertices, faces
 
 
+def _warn_polygons(label: str, what: str, n_file_faces: int, n_triangles: int) -> None:
+    warnings.warn(
+        MeshWarning(
+            f"{label}: {what} with more than 3 sides were triangulated "
+            f"({n_file_faces} faces in the file became {n_triangles} triangles). "
+            "Triangulate the mesh yourself to control how."
+        ),
+        stacklevel=3,
+    )
+
+
+#: The (temporary file, target) pairs of the innermost :func:`staged_writes` block, if any.
+_STAGED: ContextVar[list | None] = ContextVar("meshcorr_staged_writes", default=None)
+
+
+def check_outputs(outputs: dict, inputs: dict | None = None) -> None:
+    """Refuse, before any work, output paths that cannot or must not be written.
+
+    Checked for each output: it is not the path of an input (compared as
+    real paths, and as the same file where both exist), no two outputs share
+    a path, its folder exists and a file can be created there (a probe file
+    is made and removed: this catches read-only file systems and ``/proc``),
+    and an existing file there is a regular file that may be replaced (not
+    read-only, not immutable). ``"-"`` (stdout) and ``None`` are skipped.
+
+    Parameters
+    ----------
+    outputs : dict of str -> path
+        What each output is (``"-o"``, ``"--report"``, ...) and where it goes.
+    inputs : dict of str -> path, optional
+        The input files, named the same way.
+
+    Raises
+    ------
+    OutputError
+        Naming the option, the path and the fix.
+    """
+    inputs = {what: Path(path) for what, path in (inputs or {}).items() if path is not None}
+    seen: dict[str, str] = {}
+    for what, path in outputs.items():
+        if path is None or str(path) == "-":
+            continue
+        path = Path(path)
+        real = os.path.realpath(path)
+        for source, input_path in inputs.items():
+            if real == os.path.realpath(input_path) or (path.exists() and input_path.exists()
+                                                        and os.path.samefile(path, input_path)):
+                raise OutputError(f"{what} {path} is the input {source}: writing there would replace it. "
+                                  "Give another output path.")
+        if real in seen:
+            raise OutputError(f"{what} and {seen[real]} are the same file ({path}): one would overwrite the "
+                              "other. Give them different paths.")
+        seen[real] = what
+        folder = path.parent
+        if not folder.is_dir():
+            raise OutputError(f"Cannot write {what} {path}: the folder {folder} does not exist. Create it first.")
+        if path.is_dir():
+            raise OutputError(f"Cannot write {what} {path}: it is a folder. Give a file name such as map.txt.")
+        if path.exists() and not stat.S_ISREG(path.stat().st_mode):
+            raise OutputError(f"Cannot write {what} {path}: it exists and is not a regular file "
+                              "(a device or a pipe); give a file path.")
+        if path.exists() and not os.access(path, os.W_OK):
+            raise OutputError(f"Cannot write {what} {path}: the file exists and cannot be replaced "
+                              "(read-only or immutable). Remove it or give another path.")
+        probe = folder / f".{path.name}.{secrets.token_hex(6)}.probe"
+        try:
+            os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+            os.unlink(probe)
+        except OSError as exc:
+            raise OutputError(f"Cannot write {what} {path}: no file can be created in {folder} "
+                              f"({exc.strerror}). Give a path in a writable folder.") from exc
+
+
+@contextmanager
+def staged_writes():
+    """Let the writes inside the block appear together at its end, or not at all.
+
+    Inside the block :func:`atomic_write` (and so :func:`write_map`,
+    :func:`write_mesh` and the report writer) writes each file to its
+    temporary file only. When the block ends normally the temporary files
+    are moved over their targets, in the order written; when it raises
+    (including KeyboardInterrupt) they are removed and no target changes.
+    """
+    staged: list = []
+    token = _STAGED.set(staged)
+    try:
+        yield
+    except BaseException:
+        _STAGED.reset(token)
+        for temp, _ in staged:
+            temp.unlink(missing_ok=True)
+        raise
+    _STAGED.reset(token)
+    try:
+        for index, (temp, path) in enumerate(staged):
+            _replace(temp, path)
+    except BaseException:
+        for temp, _ in staged[index:]:
+            temp.unlink(missing_ok=True)
+        raise
+
+
+def _replace(temp: Path, path: Path) -> None:
+    try:
+        os.replace(temp, path)
+    except OSError as exc:
+        temp.unlink(missing_ok=True)
+        raise OutputError(f"Cannot write {path}: {exc.strerror}.") from exc
+
+
 def atomic_write(path, writer: Callable[[BinaryIO], object]) -> None:
     """Write a file atomically: all of it appears at ``path``, or nothing changes.
 
     ``writer`` writes into a temporary file in the same directory, opened in
     binary mode; the temporary file then replaces ``path`` with
-    :func:`os.replace`. If ``writer`` raises, the temporary file is removed
-    and ``path`` is left as it was.
+    :func:`os.replace` (inside :func:`staged_writes`: when that block ends).
+    If ``writer`` raises, the temporary file is removed and ``path`` is left
+    as it was.
 
     Parameters
     ----------
@@ -242,25 +420,33 @@ def atomic_write(path, writer: Callable[[BinaryIO], object]) -> None:
 
     Raises
     ------
-    ParameterError
-        If the directory of ``path`` does not exist.
+    OutputError
+        If the directory of ``path`` does not exist or the file cannot be
+        created there (a :class:`ParameterError`).
     """
     path = Path(path)
     directory = path.parent
     if not directory.is_dir():
-        raise ParameterError(f"Cannot write {path}: directory {directory} does not exist.")
+        raise OutputError(f"Cannot write {path}: directory {directory} does not exist.")
     temp = directory / f".{path.name}.{secrets.token_hex(6)}.tmp"
-    # os.open applies the umask, so the final file gets ordinary permissions.
-    fd = os.open(temp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+    try:
+        # os.open applies the umask, so the final file gets ordinary permissions.
+        fd = os.open(temp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+    except OSError as exc:
+        raise OutputError(f"Cannot write {path}: no file can be created in {directory} ({exc.strerror}).") from exc
     try:
         with os.fdopen(fd, "wb") as file:
             writer(file)
             file.flush()
             os.fsync(file.fileno())
-        os.replace(temp, path)
     except BaseException:
         temp.unlink(missing_ok=True)
         raise
+    staged = _STAGED.get()
+    if staged is not None:
+        staged.append((temp, path))
+    else:
+        _replace(temp, path)
 
 
 def _check_map(mapping) -> np.ndarray:
@@ -292,13 +478,15 @@ def write_map(path, mapping) -> None:
         atomic_write(path, lambda file: file.write(text.encode("ascii")))
 
 
-def read_map(path) -> np.ndarray:
+def read_map(path, *, name: str | None = None) -> np.ndarray:
     """Read a vertex map written by :func:`write_map` (``.npy`` or one integer per line).
 
     Parameters
     ----------
     path : str or os.PathLike
         The map file. Blank lines in text files are ignored.
+    name : str, optional
+        What the file is, for messages (e.g. ``"MAP"``).
 
     Returns
     -------
@@ -306,19 +494,22 @@ def read_map(path) -> np.ndarray:
 
     Raises
     ------
-    ParameterError
-        If the file is missing or does not hold a 1-D array of integers.
+    InputError
+        If the file is missing or does not hold a 1-D array of integers
+        (a :class:`ParameterError`).
     """
     path = Path(path)
     if not path.is_file():
-        raise ParameterError(f"No such file: {path}")
+        which = f" ({name})" if name else ""
+        raise InputError(f"No such file: {path}{which}. Check the path." if not path.exists()
+                         else f"Not a file: {path}{which}; give a map file.")
     if path.suffix.lower() == ".npy":
         try:
             mapping = np.load(path, allow_pickle=False)
         except Exception as exc:
-            raise ParameterError(f"{path}: could not be read as a .npy array ({exc}).") from exc
+            raise InputError(f"{path}: could not be read as a .npy array ({exc}).") from exc
         if mapping.ndim != 1 or not np.issubdtype(mapping.dtype, np.integer):
-            raise ParameterError(
+            raise InputError(
                 f"{path}: a map must be a 1-D integer array; got shape {mapping.shape} "
                 f"and dtype {mapping.dtype}."
             )
@@ -326,12 +517,13 @@ def read_map(path) -> np.ndarray:
     try:
         lines = path.read_text(encoding="ascii").splitlines()
     except UnicodeDecodeError as exc:
-        raise ParameterError(f"{path}: a map file must be text with one integer per line.") from exc
+        raise InputError(f"{path}: not a text file (byte {exc.start} is not ASCII); a map file is text with "
+                         "one integer per line, or a .npy array.") from exc
     numbered = [(i + 1, line.strip()) for i, line in enumerate(lines) if line.strip()]
     for number, line in numbered:
-        if not re.fullmatch(r"[+-]?\d+", line):
-            raise ParameterError(
-                f"{path}, line {number}: expected one integer per line, got {line[:40]!r}."
+        if not re.fullmatch(r"[+-]?\d{1,18}", line):
+            raise InputError(
+                f"{path}, line {number}: expected one integer per line (at most 18 digits), got {line[:40]!r}."
             )
     return np.array([int(line) for _, line in numbered], dtype=np.int64)
 
@@ -368,7 +560,7 @@ def write_mesh(path, vertices, faces, vertex_colors=None) -> None:
 
 
 def read_npz(path, what: str) -> dict[str, np.ndarray]:
-    """Every array of an ``.npz`` file (no pickles), or a :class:`ParameterError` naming ``what`` was expected.
+    """Every array of an ``.npz`` file (no pickles), or an :class:`InputError` naming ``what`` was expected.
 
     Parameters
     ----------
@@ -380,9 +572,9 @@ def read_npz(path, what: str) -> dict[str, np.ndarray]:
         with np.load(path, allow_pickle=False) as data:
             return {name: np.asarray(data[name]) for name in data.files}
     except FileNotFoundError as exc:
-        raise ParameterError(f"{path}: no such file.") from exc
+        raise InputError(f"{path}: no such file.") from exc
     except (OSError, ValueError) as exc:
-        raise ParameterError(f"{path} is not {what} (.npz): {exc}.") from exc
+        raise InputError(f"{path} is not {what} (.npz): {exc}.") from exc
 
 
 def write_npz(path, arrays: dict) -> None:

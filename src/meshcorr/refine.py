@@ -57,8 +57,9 @@ import scipy.sparse as sp
 from scipy.optimize import linear_sum_assignment
 from scipy.sparse.linalg import LinearOperator, eigsh, splu
 
+from ._interrupt import deferred_interrupt
 from ._params import check_int
-from ._threads import parallel_map, single_blas_thread
+from ._threads import parallel_map, single_blas_thread, wait_for
 from .embedding import deterministic_start, sign_convention
 from .errors import ParameterError
 from .mesh import Mesh
@@ -334,7 +335,7 @@ class BasisPrefetch:
     def cancel(self) -> None:
         """Stop the worker at its next sparse solve (or between the meshes) and wait for it."""
         self._cancel.set()
-        self._done.wait()
+        wait_for(self._done)  # through Ctrl-C too: the interpreter must not exit under the worker
 
 
 @contextmanager
@@ -375,11 +376,14 @@ def prefetch_bases(source: Mesh, target: Mesh, k: int, *, random_state: int | No
         return
     k = _basis_size(k, source, target)
     with single_blas_thread():
-        prefetch = BasisPrefetch(source, target, k, random_state)
+        prefetch = None
         try:
+            with deferred_interrupt():  # a Ctrl-C as the worker starts finds it to cancel
+                prefetch = BasisPrefetch(source, target, k, random_state)
             yield prefetch
         except BaseException:
-            prefetch.cancel()
+            if prefetch is not None:
+                prefetch.cancel()
             raise
         prefetch.wait()
 

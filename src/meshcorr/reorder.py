@@ -43,7 +43,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ._params import check_choice, check_int
-from ._threads import single_blas_thread
+from ._threads import kdtree_query, single_blas_thread
 
 REORDER_MODES = ("exhaustive", "greedy", "signs", "signs-greedy", "none")
 
@@ -95,7 +95,7 @@ def configuration_cost(X: np.ndarray, Y: np.ndarray, perm, signs, tree: cKDTree 
         A tree built on ``Y`` to reuse.
     """
     tree = cKDTree(Y) if tree is None else tree
-    dist, _ = tree.query(_to_target_frame(X, perm, signs), workers=-1)
+    dist, _ = kdtree_query(tree, _to_target_frame(X, perm, signs))
     return float(dist.mean())
 
 
@@ -114,7 +114,7 @@ def _batched_costs(Xs: np.ndarray, tree: cKDTree, configs: list[tuple[tuple, tup
     chunk = max(1, 2_000_000 // max(1, len(Xs)))
     for start in range(0, len(configs), chunk):
         block = configs[start:start + chunk]
-        dist, _ = tree.query(_configured_queries(Xs, block), workers=-1)
+        dist, _ = kdtree_query(tree, _configured_queries(Xs, block))
         costs[start:start + len(block)] = dist.reshape(len(block), len(Xs)).mean(axis=1)
     return costs
 
@@ -285,7 +285,7 @@ def _greedy_order(X: np.ndarray, Y: np.ndarray, sample: np.ndarray) -> tuple[tup
     def cost(perm, signs):
         m = len(perm)
         tree = cKDTree(Y[:, list(perm)] * np.asarray(signs, dtype=float))
-        dist, _ = tree.query(Xs[:, :m], workers=-1)
+        dist, _ = kdtree_query(tree, Xs[:, :m])
         return dist.mean()
 
     m0 = min(2, d)
@@ -306,7 +306,7 @@ def _greedy_signs(X: np.ndarray, Y: np.ndarray, sample: np.ndarray) -> tuple:
         def cost(s):
             sg = np.asarray(signs + [s], dtype=float)
             tree = cKDTree(Y[:, :c + 1] * sg)
-            return tree.query(X[sample, :c + 1], workers=-1)[0].mean()
+            return kdtree_query(tree, X[sample, :c + 1])[0].mean()
         signs.append(min((1, -1), key=cost))
     return tuple(signs)
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field, fields
 import numpy as np
 
 from ._version import __version__
-from .errors import ParameterError
+from .errors import InputError, ParameterError
 from .mesh import Mesh
 from .reorder import Configuration
 
@@ -431,14 +431,14 @@ class Correspondence:
 
         Raises
         ------
-        ParameterError
+        InputError
             If the file is missing or is no saved result.
         """
         from .io import read_npz
 
         arrays = read_npz(path, "a saved meshcorr result")
         if "json" not in arrays or "map" not in arrays:
-            raise ParameterError(f"{path} is not a saved meshcorr result: it lacks the map or its metadata.")
+            raise InputError(f"{path} is not a saved meshcorr result: it lacks the map or its metadata.")
         rest = json.loads(arrays.pop("json").tobytes().decode())
         configuration = rest.pop("configuration")
         to_config = lambda d: Configuration(tuple(d["perm"]), tuple(d["signs"]), d["cost"])  # noqa: E731

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import MeshError, ParameterError
+from .errors import MeshError, OutputError, ParameterError
 from .precise import PreciseMap
 
 __all__ = ["TexturedMesh", "read_textured_obj", "transfer_uv", "write_textured_obj"]
@@ -156,8 +156,10 @@ def write_textured_obj(path: str | os.PathLike, vertices, faces, uv, image, *,
 
     Raises
     ------
+    OutputError
+        If a file to write is one of ``inputs``.
     ParameterError
-        If a file to write is one of ``inputs``, or the folder does not exist.
+        If the folder does not exist, the name does not end in ``.obj`` or ``uv`` has the wrong shape.
     """
     from .io import atomic_write
 
@@ -168,7 +170,7 @@ def write_textured_obj(path: str | os.PathLike, vertices, faces, uv, image, *,
     protected = {Path(p).resolve() for p in inputs if p}
     for out in (obj, mtl, png):
         if out.resolve() in protected:
-            raise ParameterError(f"{out} is an input file; choose another output name (inputs are never replaced).")
+            raise OutputError(f"{out} is an input file; choose another output name (inputs are never replaced).")
     vertices, faces = np.asarray(vertices, dtype=np.float64), np.asarray(faces, dtype=np.int64)
     uv = np.nan_to_num(np.asarray(uv, dtype=np.float64), nan=0.0)
     if uv.shape != (len(vertices), 2):

@@ -34,6 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .._threads import kdtree_query
+
 #: The proper sign changes of three axes: the identity and the half-turns about each axis.
 HALF_TURNS = (np.eye(3), np.diag([1.0, -1.0, -1.0]), np.diag([-1.0, 1.0, -1.0]), np.diag([-1.0, -1.0, 1.0]))
 
@@ -143,7 +145,7 @@ def chamfer_distance(P: np.ndarray, Q: np.ndarray) -> float:
     P : (n1, d) float
     Q : (n2, d) float
     """
-    return float(cKDTree(Q).query(P, workers=-1)[0].mean() + cKDTree(P).query(Q, workers=-1)[0].mean())
+    return float(kdtree_query(cKDTree(Q), P)[0].mean() + kdtree_query(cKDTree(P), Q)[0].mean())
 
 
 def align_pair(P: np.ndarray, Q: np.ndarray, P_weights: np.ndarray | None = None,

@@ -39,6 +39,7 @@ from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from .._params import check_float, check_int
+from .._threads import kdtree_query
 from ..mesh import MeshLike
 from ..result import Correspondence
 from ..timing import StageProgress, StageTimer
@@ -127,7 +128,7 @@ def _kept(distances: np.ndarray, trim: float) -> np.ndarray:
 def _icp_from(P, Q, tree, start: Similarity, *, max_iter, trim, huber, with_scale, tol) -> RigidICPResult:
     transform, previous, history, converged = start, None, [], False
     for iteration in range(max_iter + 1):
-        dist, matches = tree.query(transform.apply(P), workers=-1)
+        dist, matches = kdtree_query(tree, transform.apply(P))
         keep = _kept(dist, trim)
         cost = float(dist[keep].mean())
         changed = 1.0 if previous is None else float(np.mean(matches != previous))

@@ -48,6 +48,7 @@ from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
 from .._params import check_choice, check_float, check_int
+from .._threads import kdtree_query
 from ..mesh import MeshLike
 from ..result import Correspondence
 from ..timing import StageProgress, StageTimer
@@ -209,7 +210,7 @@ def match_shape_context(source: MeshLike, target: MeshLike, *, prealign: bool = 
         cost = chi_square_cost(H, G)
         match = match_histograms(cost, assignment)
     with timer.stage("matching"):
-        nearest_sample = cKDTree(P[sp]).query(P, workers=-1)[1]
+        nearest_sample = kdtree_query(cKDTree(P[sp]), P)[1]
         moved = P + (Q[sq[match]] - P[sp])[nearest_sample]
         local_map, _ = nearest_map(moved, Q, bijective=bijective)
     params = dict(prealign=prealign, n_points=n_points, assignment=assignment, bijective=bijective,

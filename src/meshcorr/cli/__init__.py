@@ -8,11 +8,13 @@ errors into one-line messages with a non-zero exit code.
 from __future__ import annotations
 
 import argparse
+import logging
 import sys
 import warnings
+from contextlib import contextmanager
 
 from .. import __version__
-from ..errors import MeshcorrError
+from ..errors import InputError, MeshcorrError, MeshError, MeshWarning
 from . import batch as _batch
 from . import bench as _bench
 from . import cache as _cache
@@ -22,12 +24,30 @@ from . import maps as _maps
 from . import match as _match
 from . import show as _show
 from . import transfer as _transfer
+from ._signals import interrupt_once
 
 #: Sub-command modules, in the order ``--help`` lists them.
 COMMANDS = [_match, _evaluate, _bench, _show, _transfer, _maps, _embed, _batch, _cache]
 
-EXIT_USAGE = 2
-EXIT_ERROR = 1
+#: Exit codes, listed in ``--help`` and the README.
+EXIT_OK = 0
+EXIT_ERROR = 1  # an internal error or out of memory
+EXIT_USAGE = 2  # bad usage: an unknown flag, a bad option value, an output that cannot be written
+EXIT_INPUT = 3  # bad input data: a mesh, map or ground-truth file that cannot be used
+EXIT_FAILED_RUNS = 4  # 'bench', 'batch': some runs failed (recorded in their results)
+EXIT_INTERRUPTED = 130  # Ctrl-C (SIGINT); no output file is left behind
+EXIT_BROKEN_PIPE = 141  # stdout closed early (piped into 'head'), as 128 + SIGPIPE
+
+EXIT_CODES = f"""\
+exit codes:
+  {EXIT_OK}    success
+  {EXIT_ERROR}    internal error or out of memory
+  {EXIT_USAGE}    bad usage: unknown flag, bad option value, an output that cannot be written
+  {EXIT_INPUT}    bad input data: a mesh, map or ground-truth file that cannot be used
+  {EXIT_FAILED_RUNS}    bench, batch: some runs failed (recorded in their results)
+  {EXIT_INTERRUPTED}  interrupted (Ctrl-C); no output file is written
+  {EXIT_BROKEN_PIPE}  stdout was closed early (e.g. piped into head)
+"""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -35,47 +55,112 @@ def build_parser() -> argparse.ArgumentParser:
         prog="meshcorr",
         description="Dense vertex-to-vertex correspondence between two 3D triangle meshes "
                     "(spectral method of Jain & Zhang 2006, and its baselines).",
-        epilog="Run 'meshcorr COMMAND --help' for the options of one command.",
+        epilog="Run 'meshcorr COMMAND --help' for the options of one command.\n\n" + EXIT_CODES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"meshcorr {__version__}")
-    parser.add_argument("--debug", action="store_true",
-                        help="show the Python traceback of unexpected errors")
+    _add_common_options(parser, default=False)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for module in COMMANDS:
         module.add_parser(sub)
+    for command in sub.choices.values():
+        # Also after the command name; SUPPRESS keeps a value given before it.
+        _add_common_options(command, default=argparse.SUPPRESS)
+        command.epilog = ((command.epilog + "\n\n") if command.epilog else "") + EXIT_CODES
+        command.formatter_class = argparse.RawDescriptionHelpFormatter
     return parser
+
+
+def _add_common_options(parser: argparse.ArgumentParser, *, default) -> None:
+    """``--debug``, ``-q`` and ``-v``, before or after the command name (unless it has its own)."""
+    def add(*flags, **kwargs):
+        if not any(flag in parser._option_string_actions for flag in flags):
+            parser.add_argument(*flags, default=default, **kwargs)
+
+    add("--debug", action="store_true", help="show the Python traceback of unexpected errors")
+    add("-q", "--quiet", action="store_true", help="no progress or status lines on stderr")
+    add("-v", "--verbose", action="store_true",
+        help="report every stage with its time as it ends, and where each input came from")
 
 
 def _show_warning(message, category, filename, lineno, file=None, line=None):
     print(f"meshcorr: warning: {message}", file=sys.stderr)
 
 
+def exit_code(error: MeshcorrError) -> int:
+    """The exit code of an expected error: bad input data (3) or bad usage (2)."""
+    if isinstance(error, (MeshError, InputError)):
+        return EXIT_INPUT
+    return EXIT_USAGE if isinstance(error, ValueError) else EXIT_ERROR
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``meshcorr`` console script."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    if args.command is None:
-        parser.print_help(sys.stderr)
-        return EXIT_USAGE
-    warnings.showwarning = _show_warning
+    """Entry point of the ``meshcorr`` console script.
+
+    ``argv=None`` runs the process's own command line: the run then owns
+    the process's SIGINT handling to its end (:func:`._signals.interrupt_once`).
+    """
+    with interrupt_once(ignore_after=argv is None):
+        args = None
+        try:
+            parser = build_parser()
+            args = parser.parse_args(argv)
+            for name in ("debug", "quiet", "verbose"):
+                setattr(args, name, bool(getattr(args, name, False)))
+            if args.command is None:
+                parser.print_help(sys.stderr)
+                return EXIT_USAGE
+            if args.quiet and args.verbose:
+                parser.error("-q/--quiet and -v/--verbose contradict each other; give one")
+            with warnings.catch_warnings(), _quiet_trimesh():
+                warnings.showwarning = _show_warning
+                if args.quiet:
+                    warnings.simplefilter("ignore", MeshWarning)
+                return int(args.run(args) or 0)
+        except MeshcorrError as exc:
+            print(f"meshcorr: error: {exc}", file=sys.stderr)
+            return exit_code(exc)
+        except MemoryError:
+            print("meshcorr: error: out of memory. The dense pipeline stores n x n matrices; "
+                  "use smaller meshes (decimate them) or a machine with more memory.", file=sys.stderr)
+            return EXIT_ERROR
+        except KeyboardInterrupt:
+            print("meshcorr: interrupted", file=sys.stderr)
+            return EXIT_INTERRUPTED
+        except BrokenPipeError:
+            # The reader of stdout went away (e.g. '| head'): stop quietly, as other tools do.
+            _silence_stdout()
+            return EXIT_BROKEN_PIPE
+        except Exception as exc:  # noqa: BLE001 - the last line of defence against tracebacks
+            if args is not None and args.debug:
+                raise
+            print(f"meshcorr: internal error: {type(exc).__name__}: {exc}. "
+                  "Run again with --debug for the traceback and report it.", file=sys.stderr)
+            return EXIT_ERROR
+
+
+@contextmanager
+def _quiet_trimesh():
+    """Hide trimesh's log lines (tracebacks of the parsers it tries in turn): read_mesh's error says it."""
+    logger = logging.getLogger("trimesh")
+    level = logger.level
+    logger.setLevel(logging.CRITICAL)
     try:
-        return int(args.run(args) or 0)
-    except MeshcorrError as exc:
-        print(f"meshcorr: error: {exc}", file=sys.stderr)
-        return EXIT_USAGE if isinstance(exc, ValueError) else EXIT_ERROR
-    except MemoryError:
-        print("meshcorr: error: out of memory. The dense pipeline stores n x n matrices; "
-              "use smaller meshes (decimate them) or a machine with more memory.", file=sys.stderr)
-        return EXIT_ERROR
-    except KeyboardInterrupt:
-        print("meshcorr: interrupted", file=sys.stderr)
-        return 130
-    except Exception as exc:  # noqa: BLE001 - the last line of defence against tracebacks
-        if args.debug:
-            raise
-        print(f"meshcorr: internal error: {type(exc).__name__}: {exc}. "
-              "Run again with --debug for the traceback and report it.", file=sys.stderr)
-        return EXIT_ERROR
+        yield
+    finally:
+        logger.setLevel(level)
+
+
+def _silence_stdout() -> None:
+    """Point stdout at /dev/null, so that the interpreter's final flush does not fail again."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):  # stdout replaced (tests) or closed
+        pass
 
 
 if __name__ == "__main__":  # pragma: no cover

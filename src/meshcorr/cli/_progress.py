@@ -10,11 +10,14 @@ class StageProgress:
     """A ``progress(stage, done, total)`` callback printing to a stream.
 
     A stage is announced only once it has run for ``delay`` seconds; its
-    completion is printed with its duration if it was announced.
+    completion is printed with its duration if it was announced (``delay=0``:
+    every stage, as ``-v`` asks). Each line starts with ``label`` (which
+    meshes the run is on), so that lines of several runs can be told apart.
     """
 
-    def __init__(self, stream=None, *, delay: float = 1.0, interval: float = 0.5) -> None:
+    def __init__(self, stream=None, *, label: str = "", delay: float = 1.0, interval: float = 0.5) -> None:
         self.stream = stream if stream is not None else sys.stderr
+        self.prefix = f"meshcorr: {label} " if label else ""
         self.delay, self.interval = delay, interval
         self.tty = hasattr(self.stream, "isatty") and self.stream.isatty()
         self._stage: str | None = None
@@ -39,6 +42,7 @@ class StageProgress:
         self._write(f"[{stage}]{pct} {elapsed:.0f} s", end=not self.tty)
 
     def _write(self, text: str, end: bool) -> None:
+        text = self.prefix + text
         if self.tty:
             self.stream.write("\r\033[K" + text + ("\n" if end else ""))
         else:

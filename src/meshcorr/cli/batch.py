@@ -27,7 +27,7 @@ map is indexed by T's vertices).
 vertex i) as each pair finishes, summary.json and summary.csv (per pair:
 status, seconds, the error with --gt) and run.json (the settings). A rerun
 with the same --out skips the pairs done; a failed pair (e.g. a bad mesh) is
-recorded and the others go on. Exit code: 0 if every pair was mapped, 1 if
+recorded and the others go on. Exit code: 0 if every pair was mapped, 4 if
 any failed. With --all-pairs, --consistency also reports the cycle-consistency
 error and writes maps made consistent through the collection (see
 meshcorr.consistency).
@@ -155,4 +155,8 @@ def run(args) -> int:
         print(f"meshcorr: {len(records) - len(failed)} of {len(records)} pairs mapped into {args.out}"
               + (f"; {len(failed)} failed, see the 'error' column of summary.csv" if failed else ""),
               file=sys.stderr)
-    return 1 if failed else 0
+    if failed:
+        from . import EXIT_FAILED_RUNS
+
+        return EXIT_FAILED_RUNS
+    return 0

@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 from ..geodesics import GEODESIC_METHODS
+from .match import seed
 
 HELP = "benchmark methods on a dataset of pairs with ground truth (resumable)"
 
@@ -23,7 +24,8 @@ error divided by sqrt(target area), and write into --out:
   summary.csv   the same table
   curves.png    cumulative error curves (needs meshcorr[plot])
 A restarted run with the same --out skips the pairs already done; a method
-that fails on a pair is recorded as 'failed' and the run goes on.
+that fails on a pair is recorded as 'failed' and the run goes on; the exit
+code is then 4.
 """
 
 
@@ -47,10 +49,9 @@ def add_parser(sub) -> None:
                    help="any option of one method, e.g. --set spectral:reorder=greedy (repeatable)")
     p.add_argument("--eval-geodesic", choices=GEODESIC_METHODS, default="heat",
                    help="geodesic solver of the evaluation (default: heat)")
-    p.add_argument("--seed", type=int, default=0, help="seed of the sample and of every method (default: 0)")
+    p.add_argument("--seed", type=seed, default=0, help="seed of the sample and of every method (default: 0)")
     p.add_argument("--retry-failed", action="store_true", help="run failed (pair, method) rows again")
     p.add_argument("--no-plot", action="store_true", help="do not draw curves.png")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     p.set_defaults(run=run)
 
 
@@ -134,7 +135,11 @@ def run(args) -> int:
                                title=f"{len({(r['source'], r['target']) for r in rows})} pairs")
     sys.stdout.write(md.read_text())
     failed = sum(e["failed"] for e in table)
-    if failed and not args.quiet:
-        print(f"meshcorr: {failed} (pair, method) runs failed; see the 'error' column of "
-              f"{Path(args.out) / 'results.csv'}", file=sys.stderr)
+    if failed:
+        from . import EXIT_FAILED_RUNS
+
+        if not args.quiet:
+            print(f"meshcorr: {failed} (pair, method) runs failed; see the 'error' column of "
+                  f"{Path(args.out) / 'results.csv'}", file=sys.stderr)
+        return EXIT_FAILED_RUNS
     return 0

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from ..geodesics import GEODESIC_METHODS
+from .match import seed
 from .show import add_camera_arguments
 
 HELP = "draw a mesh's affinity eigenvectors and its 3-D spectral embedding as a PNG"
@@ -31,7 +33,7 @@ def add_parser(sub) -> None:
                    help="geodesic solver (default: heat)")
     p.add_argument("--no-scale", dest="scale", action="store_false",
                    help="draw the embedding without scaling by sqrt(eigenvalue)")
-    p.add_argument("--seed", type=int, default=0, help="random state of the eigensolver (default 0)")
+    p.add_argument("--seed", type=seed, default=0, help="random state of the eigensolver (default 0)")
     add_camera_arguments(p)
     p.set_defaults(run=run)
 
@@ -40,14 +42,15 @@ def run(args) -> int:
     from ..io import read_mesh
     from ..plots import require_matplotlib
     from ..viz.figures import spectrum_figure
-    from .match import check_output_path
+    from ..io import check_outputs
 
-    check_output_path(args.output)
+    check_outputs({"-o": args.output}, {"MESH": args.mesh})
     require_matplotlib()
     vertices, faces = read_mesh(args.mesh, name=args.mesh)
     values = spectrum_figure(vertices, faces, args.output, n_eigenvectors=args.n_eigenvectors,
                              geodesic=args.geodesic, scale=args.scale, random_state=args.seed,
                              elev=args.elev, azim=args.azim, up=args.up, dpi=args.dpi)
     listed = ", ".join(f"{v:.4g}" for v in values[:args.n_eigenvectors])
-    print(f"wrote {args.output}; eigenvalues: {listed}")
+    if not args.quiet:
+        print(f"meshcorr: wrote {args.output}; eigenvalues: {listed}", file=sys.stderr)
     return 0

@@ -40,9 +40,10 @@ def add_parser(sub) -> None:
     p.add_argument("source", metavar="SOURCE", help="mesh whose vertices were mapped")
     p.add_argument("target", metavar="TARGET", help="mesh they were mapped onto")
     p.add_argument("map", metavar="MAP", help="the vertex map (.txt one index per line, or .npy)")
-    p.add_argument("--gt", nargs="+", required=True, metavar="GT",
-                   help="ground truth: 'identity', SOURCE.vts TARGET.vts, or a file of 0-based pairs")
-    p.add_argument("--sym", nargs="+", metavar="SYMGT",
+    p.add_argument("--gt", action="append", required=True, metavar="GT",
+                   help="ground truth: 'identity', a file of 0-based pairs, or a .vts pair given as "
+                        "--gt SOURCE.vts --gt TARGET.vts")
+    p.add_argument("--sym", action="append", metavar="SYMGT",
                    help="mirrored ground truth, same forms (or only TARGET.sym.vts after a .vts pair)")
     p.add_argument("--geodesic", choices=GEODESIC_METHODS, default="heat",
                    help="geodesic solver for the errors (default: heat)")
@@ -78,20 +79,19 @@ def run(args) -> int:
     from ..errors import ParameterError
     from ..evaluation import cumulative_curve, evaluate_map, map_quality, scalar_summary
     from ..ground_truth import load_ground_truth
-    from ..io import read_map, read_mesh
+    from ..io import check_outputs, read_map, read_mesh
     from ..mesh import Mesh, as_mesh
-    from .match import check_output_path
 
     thresholds = _thresholds(args.thresholds)
     if args.curve:
         from ..plots import require_matplotlib
 
-        check_output_path(args.curve)
+        check_outputs({"--curve": args.curve}, {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map})
         require_matplotlib()
-    source = read_mesh(args.source, name=args.source)
+    source = read_mesh(args.source, name=f"SOURCE {args.source}")
     n_source = len(source[0])
-    target = as_mesh(args.target)
-    mapping = read_map(args.map)
+    target = as_mesh(args.target, name=f"TARGET {args.target}")
+    mapping = read_map(args.map, name="MAP")
     if mapping.size != n_source:
         raise ParameterError(f"{args.map} has {mapping.size} entries but SOURCE has {n_source} "
                              "vertices; a map has one line per source vertex.")

@@ -70,12 +70,22 @@ def _inputs(args, target_mesh=None):
     return source, target, mapping
 
 
+def _check_outputs(args, outputs: dict) -> None:
+    from ..io import check_outputs
+
+    check_outputs(outputs, {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map,
+                            "--to-map": getattr(args, "to_map", None)})
+
+
 def run_texture(args) -> int:
+    from pathlib import Path
+
     from ..precise import precise_map
     from ..texture import read_textured_obj, transfer_uv, write_textured_obj
-    from .match import check_output_path
 
-    check_output_path(args.output)
+    obj = Path(args.output)
+    _check_outputs(args, {"-o": obj, "its .mtl": obj.with_suffix(".mtl"),
+                          "its texture": obj.with_name(obj.stem + "_texture.png")})
     textured = read_textured_obj(args.target)
     source, target, mapping = _inputs(args, (textured.vertices, textured.faces))
     uv = transfer_uv(precise_map(source, target, mapping, k=args.k), textured)
@@ -85,19 +95,18 @@ def run_texture(args) -> int:
 
 
 def run_fmap(args) -> int:
-    from ..errors import ParameterError
+    from ..errors import InputError, ParameterError
     from ..fmap import FunctionalMap, functional_map
     from ..io import write_map
-    from .match import check_output_path
 
-    check_output_path(args.output)
+    _check_outputs(args, {"-o": args.output})
     if (args.map is None) == (args.to_map is None):
         raise ParameterError("Give either MAP (to export its functional map) or --to-map FMAP.npz (to import one).")
     source, target, mapping = _inputs(args)
     if args.to_map:
         fmap = FunctionalMap.load(args.to_map)
         if fmap.source_basis.shape[0] != source.n_vertices or fmap.target_basis.shape[0] != target.n_vertices:
-            raise ParameterError(f"{args.to_map} was written for meshes of {fmap.source_basis.shape[0]} and "
+            raise InputError(f"{args.to_map} was written for meshes of {fmap.source_basis.shape[0]} and "
                                  f"{fmap.target_basis.shape[0]} vertices, not these ({source.n_vertices}, "
                                  f"{target.n_vertices}).")
         write_map(args.output, fmap.point_map())

@@ -11,6 +11,7 @@ from ..baselines import METHODS, SPATIAL_METHODS
 from ..errors import ParameterError
 from ..geodesics import GEODESIC_METHODS
 from ..modes import MODES, N_SAMPLES, SCALABLE_ABOVE
+from ..pipeline import REFINE_K
 from ..reorder import REORDER_MODES
 from ._progress import StageProgress
 
@@ -33,9 +34,13 @@ The Shapiro-Brady variants use -k, --geodesic, --bijective and
 not apply to the chosen method are ignored.
 
 Meshes: OFF, OBJ, PLY or STL triangle meshes (vertex order is kept as in the
-file). Output: line i of MAP holds the 0-based index of the TARGET vertex
-matched to SOURCE vertex i (-1 if that vertex was not mapped, see
---largest-component); a .npy extension writes a NumPy int64 array instead.
+file; the README's "Reading meshes: input rules" says what is checked).
+Output: line i of MAP holds the 0-based index of the TARGET vertex matched to
+SOURCE vertex i (-1 if that vertex was not mapped, see --largest-component);
+a .npy extension writes a NumPy int64 array instead, '-o -' writes the text
+map on stdout. Every output path is checked before the work starts, none may
+be an input, and the outputs appear together when the run ends (none on an
+error or Ctrl-C).
 """
 
 
@@ -44,8 +49,9 @@ def add_parser(sub) -> None:
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("source", metavar="SOURCE", help="mesh whose vertices are mapped")
     p.add_argument("target", metavar="TARGET", help="mesh they are mapped onto")
-    p.add_argument("-o", "--output", metavar="MAP", required=True,
-                   help="where to write the map (.txt: one index per line; .npy: NumPy array)")
+    p.add_argument("-o", "--output", metavar="MAP",
+                   help="where to write the map (.txt: one index per line; .npy: NumPy array; "
+                        "'-': text on stdout); may be left out with --json")
     g = p.add_argument_group("method")
     g.add_argument("--method", choices=tuple(METHODS), default="spectral",
                    help="the spectral method or one of the paper's baselines (default: spectral; "
@@ -54,7 +60,8 @@ def add_parser(sub) -> None:
                    help=f"do not centre, scale and rotate the inputs to their principal axes "
                         f"before a spatial method ({', '.join(SPATIAL_METHODS)})")
     g.add_argument("-k", type=int, default=6,
-                   help="eigenpairs computed; the embedding has k-1 dimensions (default: 6, the paper's)")
+                   help="eigenpairs computed, 2 to 10; the embedding has k-1 dimensions "
+                        "(default: 6, the paper's)")
     g.add_argument("--geodesic", choices=GEODESIC_METHODS, default="heat",
                    help="geodesic solver: heat method, fast marching, exact MMP (needs "
                         "meshcorr[exact]) or edge Dijkstra (default: heat)")
@@ -64,6 +71,10 @@ def add_parser(sub) -> None:
                    help="use plain eigenvectors instead of scaling them by sqrt(eigenvalue)")
     g.add_argument("--icp-iterations", type=int, default=10,
                    help="most thin-plate-spline ICP iterations; 0 skips the alignment (default: 10)")
+    g.add_argument("--control-points", type=int, default=500, dest="n_control", metavar="N",
+                   help="control points of each thin-plate-spline fit (default: 500)")
+    g.add_argument("--anneal", type=float, default=0.5,
+                   help="factor by which the TPS smoothing shrinks each ICP iteration (default: 0.5)")
     g.add_argument("--anchors", type=int, default=3, dest="n_anchors",
                    help="anchor pairs h for proximity-aided matching; 0 disables it (default: 3)")
     g.add_argument("--alpha", type=float, default=1.0, dest="anchor_weight",
@@ -73,7 +84,7 @@ def add_parser(sub) -> None:
     g.add_argument("--largest-component", action="store_true",
                    help="map only the largest connected component of each mesh instead of "
                         "failing on meshes with several components")
-    g.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    g.add_argument("--seed", type=seed, default=0, help="random seed, an integer >= 0 (default: 0)")
     g.add_argument("--symmetry", choices=("auto", "cost", "mirror"), default="auto",
                    help="choice among near-tied eigenvector configurations: auto keeps the "
                         "orientation-preserving map whose curvature agrees best (resolves the left/right "
@@ -81,6 +92,8 @@ def add_parser(sub) -> None:
                         "configuration (the paper), mirror the other one (default: auto)")
     g.add_argument("--refine", action=argparse.BooleanOptionalAction, default=True,
                    help="refine the map by ZoomOut spectral upsampling (default: on)")
+    g.add_argument("--refine-k", type=int, default=REFINE_K, metavar="K",
+                   help=f"Laplace-Beltrami basis size the refinement ends with (default: {REFINE_K})")
     g.add_argument("--anchor-scale", choices=("embedding", "geodesic"), default="embedding",
                    help="scale of the anchor term: the embedding's length scale, or geodesics divided "
                         "by the largest one as in the paper (default: embedding)")
@@ -92,38 +105,54 @@ def add_parser(sub) -> None:
     s.add_argument("--samples", type=int, default=N_SAMPLES, dest="n_samples", metavar="N",
                    help=f"Nystrom samples (landmark vertices) of the scalable mode (default: {N_SAMPLES})")
     s.add_argument("--landmarks", metavar="FILE", dest="landmarks_file", help=argparse.SUPPRESS)
+    s.add_argument("--scalable-above", type=int, default=SCALABLE_ABOVE, metavar="N",
+                   help=f"--mode auto: the scalable mode from this many vertices on (default: {SCALABLE_ABOVE})")
     s.add_argument("--max-memory", metavar="SIZE", default=None,
                    help="memory the dense mode may use, e.g. 4GiB or 500MB; larger inputs are refused "
                         "(default: 80%% of the memory available)")
     o = p.add_argument_group("output")
     o.add_argument("--json", action="store_true",
-                   help="print a machine-readable summary (timings, configuration, cost) on stdout")
+                   help="print a machine-readable summary (timings, configuration, cost) on stdout "
+                        "(then -o may be left out)")
     o.add_argument("--alternative-out", metavar="MAP",
                    help="also write the alternative map (usually the left/right mirror image of MAP)")
-    o.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     o.add_argument("--report", metavar="REPORT.html",
                    help="also write a self-contained HTML report: linked rotatable 3-D views coloured "
                         "by the correspondence, stage timings, eigenvector configuration")
-    o.add_argument("--gt", nargs="+", metavar="GT",
-                   help="ground truth for the report's error curve ('identity', SOURCE.vts "
-                        "TARGET.vts, or a file of 0-based pairs)")
+    o.add_argument("--gt", action="append", metavar="GT",
+                   help="ground truth for the report's error curve: 'identity', a file of 0-based "
+                        "pairs, or a .vts pair given as --gt SOURCE.vts --gt TARGET.vts")
     p.set_defaults(run=run)
 
 
-def check_output_path(path: str) -> None:
-    """Fail before hours of work if the output cannot be written."""
-    folder = os.path.dirname(os.path.abspath(path)) or "."
-    if not os.path.isdir(folder):
-        raise ParameterError(f"Cannot write {path}: the folder {folder} does not exist. Create it first.")
-    if not os.access(folder, os.W_OK):
-        raise ParameterError(f"Cannot write {path}: no permission to write in {folder}.")
-    if os.path.isdir(path):
-        raise ParameterError(f"Cannot write {path}: it is a folder. Give a file name such as map.txt.")
+def seed(text: str) -> int:
+    """``--seed``: an integer >= 0 (numpy's generators refuse negative seeds)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {value}")
+    return value
+
+
+def check_output_path(path: str, what: str = "the output") -> None:
+    """Fail before hours of work if the output cannot be written (:func:`meshcorr.io.check_outputs`)."""
+    from ..io import check_outputs
+
+    check_outputs({what: path})
+
+
+def progress_for(args, label: str) -> StageProgress | None:
+    """The progress callback of ``-q`` / default / ``-v``: lines on stderr naming ``label``."""
+    if args.quiet:
+        return None
+    return StageProgress(sys.stderr, label=label, delay=0.0 if args.verbose else 1.0)
 
 
 def run(args) -> int:
     from .. import match
-    from ..io import write_map
+    from ..io import check_outputs, staged_writes, write_map
 
     if args.landmarks_file is not None:
         if args.landmarks_file.strip().isdigit():
@@ -131,40 +160,59 @@ def run(args) -> int:
                                  f"scalable mode): use --samples {args.landmarks_file.strip()}.")
         raise ParameterError("--landmarks FILE (user landmark pairs) is not supported yet; for the Nystrom "
                              "sample count use --samples N.")
-    check_output_path(args.output)
-    if args.alternative_out:
-        check_output_path(args.alternative_out)
-    if args.report:
-        check_output_path(args.report)
-    elif args.gt:
+    if args.output is None and not args.json:
+        raise ParameterError("Give -o MAP for the map (or -o - for stdout), or --json for the summary only.")
+    if args.output == "-" and args.json:
+        raise ParameterError("-o - and --json both write to stdout; write the map to a file instead.")
+    if args.gt and not args.report:
         raise ParameterError("--gt is used by the HTML report only: add --report REPORT.html "
                              "(or score the map with 'meshcorr evaluate').")
-    progress = None if args.quiet else StageProgress(sys.stderr)
+    inputs = {"SOURCE": args.source, "TARGET": args.target}
+    inputs.update({f"--gt {gt}": gt for gt in args.gt or () if gt != "identity"})
+    check_outputs({"-o": args.output, "--alternative-out": args.alternative_out, "--report": args.report},
+                  inputs)
+    if args.verbose:
+        print(f"meshcorr: matching {args.source} -> {args.target}", file=sys.stderr)
     result = match(args.source, args.target, symmetry=args.symmetry, refine=args.refine,
                    anchor_scale=args.anchor_scale, k=args.k, geodesic=args.geodesic,
                    scale_eigenvalues=args.scale_eigenvalues, reorder=args.reorder,
-                   icp_iterations=args.icp_iterations, n_anchors=args.n_anchors,
-                   anchor_weight=args.anchor_weight, bijective=args.bijective,
+                   icp_iterations=args.icp_iterations, n_control=args.n_control, anneal=args.anneal,
+                   n_anchors=args.n_anchors, anchor_weight=args.anchor_weight, bijective=args.bijective,
                    largest_component=args.largest_component, random_state=args.seed,
-                   progress=progress, method=args.method, prealign=args.prealign, mode=args.mode,
-                   n_samples=args.n_samples, max_memory=args.max_memory)
-    write_map(args.output, result.map)
-    if args.alternative_out:
-        if result.alternative_map is None:
-            raise ParameterError(f"No alternative map to write to {args.alternative_out}: only the spectral "
-                                 "method with at least two eigenvector configurations has one.")
-        write_map(args.alternative_out, result.alternative_map)
+                   progress=progress_for(args, f"{os.path.basename(args.source)} -> "
+                                               f"{os.path.basename(args.target)}"),
+                   method=args.method, prealign=args.prealign, mode=args.mode,
+                   n_samples=args.n_samples, max_memory=args.max_memory,
+                   scalable_above=args.scalable_above, refine_k=args.refine_k)
+    if args.alternative_out and result.alternative_map is None:
+        raise ParameterError(f"No alternative map to write to {args.alternative_out}: only the spectral "
+                             "method with at least two eigenvector configurations has one.")
     summary = result.summary()
     summary.update(source=args.source, target=args.target, output=args.output)
-    if args.report:
-        _write_report(args, result.map, summary)
+    # All outputs appear together, or none (an error in the report, or Ctrl-C, leaves no map).
+    with staged_writes():
+        if args.output not in (None, "-"):
+            write_map(args.output, result.map)
+        if args.alternative_out:
+            write_map(args.alternative_out, result.alternative_map)
+        if args.report:
+            _write_report(args, result.map, summary)
+    if args.output == "-":
+        sys.stdout.write("".join(f"{value}\n" for value in result.map.tolist()))
+        sys.stdout.flush()
     if args.json:
         json.dump(summary, sys.stdout, indent=2)
         sys.stdout.write("\n")
-    elif not args.quiet:
+        sys.stdout.flush()
+    if not args.quiet:
         total = sum(result.timings.values())
-        print(f"meshcorr: wrote {args.output}: {summary['n_mapped']} source vertices mapped onto "
-              f"{summary['n_target_hit']} target vertices in {total:.1f} s", file=sys.stderr)
+        where = "stdout" if args.output == "-" else args.output
+        if where:
+            print(f"meshcorr: wrote {where}: {summary['n_mapped']} source vertices mapped; they land on "
+                  f"{summary['n_target_hit']} distinct target vertices ({total:.1f} s)", file=sys.stderr)
+        for what, path in (("alternative map", args.alternative_out), ("report", args.report)):
+            if path:
+                print(f"meshcorr: wrote the {what} {path}", file=sys.stderr)
     return 0
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 import numpy as np
 
@@ -28,9 +29,9 @@ def add_parser(sub) -> None:
     p.add_argument("target", metavar="TARGET", help="mesh they were mapped onto")
     p.add_argument("map", metavar="MAP", help="the vertex map (.txt one index per line, or .npy)")
     p.add_argument("-o", "--output", required=True, metavar="FILE.png", help="the picture to write")
-    p.add_argument("--gt", nargs="+", metavar="GT",
-                   help="ground truth ('identity', SOURCE.vts TARGET.vts, or a file of 0-based "
-                        "pairs): adds a row coloured through it")
+    p.add_argument("--gt", action="append", metavar="GT",
+                   help="ground truth ('identity', a file of 0-based pairs, or --gt SOURCE.vts "
+                        "--gt TARGET.vts): adds a row coloured through it")
     p.add_argument("--error", action="store_true",
                    help="colour SOURCE by geodesic error (needs --gt)")
     p.add_argument("--coloring", choices=("parts", "xyz"), default="parts",
@@ -65,15 +66,15 @@ def run(args) -> int:
     from ..io import read_map, read_mesh
     from ..plots import require_matplotlib
     from ..viz.figures import correspondence_figure
-    from .match import check_output_path
+    from ..io import check_outputs
 
-    check_output_path(args.output)
+    check_outputs({"-o": args.output}, {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map})
     require_matplotlib()
     if args.error and not args.gt:
         raise ParameterError("--error colours SOURCE by its error against the ground truth: give --gt GT.")
     source = read_mesh(args.source, name=args.source)
     target = read_mesh(args.target, name=args.target)
-    mapping = read_map(args.map)
+    mapping = read_map(args.map, name="MAP")
     truth = dense_truth(args.gt, len(source[0]), len(target[0])) if args.gt else None
     info = correspondence_figure(source, target, mapping, args.output, truth=truth,
                                  error=args.error, coloring=args.coloring, geodesic=args.geodesic,
@@ -82,5 +83,6 @@ def run(args) -> int:
     line = f"wrote {args.output}"
     if info:
         line += f" (geodesic error / sqrt(area): mean {info['mean_error']:.4f})"
-    print(line)
+    if not args.quiet:
+        print(f"meshcorr: {line}", file=sys.stderr)
     return 0

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 HELP = "carry per-vertex colours or a scalar field from TARGET onto SOURCE; write a coloured PLY"
 
@@ -40,22 +41,24 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from ..errors import ParameterError
-    from ..io import read_map, read_mesh, write_mesh
+    from ..io import read_map, read_mesh, staged_writes, write_mesh
     from ..transfer import check_map, read_attribute, transfer_attribute, write_values
-    from .match import check_output_path
+    from ..io import check_outputs
 
     if not args.output.lower().endswith((".ply", ".obj")):
         raise ParameterError(f"Cannot write {args.output}: vertex colours need a .ply or .obj file.")
-    check_output_path(args.output)
-    if args.values_out:
-        check_output_path(args.values_out)
+    inputs = {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map, "--attribute": args.attribute}
+    check_outputs({"-o": args.output, "--values-out": args.values_out}, inputs)
     V1, F1 = read_mesh(args.source, name=args.source)
     V2, F2 = read_mesh(args.target, name=args.target)
-    mapping = check_map(read_map(args.map), len(V1), len(V2), name=args.map)
+    mapping = check_map(read_map(args.map, name="MAP"), len(V1), len(V2), name=args.map)
     values = read_attribute(args.attribute, args.target, V2, F2)
     colors, pulled = transfer_attribute(values, mapping, cmap=args.cmap)
-    write_mesh(args.output, V1, F1, vertex_colors=colors)
-    if args.values_out:
-        write_values(args.values_out, pulled)
-    print(f"wrote {args.output} ({int((mapping >= 0).sum())}/{len(V1)} source vertices mapped)")
+    with staged_writes():
+        write_mesh(args.output, V1, F1, vertex_colors=colors)
+        if args.values_out:
+            write_values(args.values_out, pulled)
+    if not args.quiet:
+        print(f"meshcorr: wrote {args.output} ({int((mapping >= 0).sum())}/{len(V1)} source vertices mapped)",
+              file=sys.stderr)
     return 0

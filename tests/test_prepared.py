@@ -137,8 +137,9 @@ def test_n_landmarks_was_renamed_n_samples(pair, tmp_path, capsys):
     code = main(["match", str(path), str(path), "-o", str(tmp_path / "m.txt"), "--landmarks", "48"])
     assert code == 2
     assert "--landmarks N was renamed --samples N" in capsys.readouterr().err
-    code = main(["match", str(path), str(path), "-o", str(tmp_path / "m.txt"), "--landmarks", "pairs.txt"])
-    assert code == 2 and "use --samples N" in capsys.readouterr().err
+    code = main(["match", str(path), str(path), "-o", str(tmp_path / "m.txt"), "--landmarks",
+                 str(tmp_path / "pairs.txt")])
+    assert code == 3 and "No such landmark file" in capsys.readouterr().err
 
 
 def test_prepared_shapes_with_user_landmarks_give_the_same_map(pair):

@@ -20,12 +20,15 @@ spread) and is meant to be refined (:mod:`meshcorr.refine`).
 
 from __future__ import annotations
 
+import os
+import re
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .errors import ParameterError
+from .errors import InputError, ParameterError
 from .mesh import Mesh
 
 RowFn = Callable[[int], np.ndarray]
@@ -120,3 +123,44 @@ def check_landmarks(landmarks, source: Mesh, target: Mesh) -> np.ndarray | None:
                                  "on the largest component.")
         local.append(mapped)
     return np.stack(local, axis=1)
+
+
+def read_landmarks(path: str | os.PathLike) -> np.ndarray:
+    """Read a landmark file: one ``source_index target_index`` pair a line, 0-based.
+
+    Blank lines and ``#`` comments are skipped; the two indices may be
+    separated by spaces, a comma, a colon or a semicolon.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    pairs : (L, 2) int64
+
+    Raises
+    ------
+    InputError
+        A missing, non-text or empty file, or a line that is not two integers
+        (named by its number).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"No such landmark file: {path}" if not path.exists() else f"Not a file: {path}")
+    try:
+        text = path.read_text(encoding="ascii")
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{path}: a landmark file must be plain text (one 'i j' pair a line).") from exc
+    pairs = []
+    for number, line in enumerate(text.splitlines(), 1):
+        fields = [f for f in re.split(r"[\s,:;]+", line.split("#", 1)[0].strip()) if f]
+        if not fields:
+            continue
+        if len(fields) != 2 or not all(re.fullmatch(r"[+-]?\d{1,18}", f) for f in fields):
+            raise InputError(f"{path}, line {number}: expected a 0-based vertex pair 'source_index "
+                             f"target_index'; got {line.strip()[:40]!r}.")
+        pairs.append((int(fields[0]), int(fields[1])))
+    if not pairs:
+        raise InputError(f"{path}: the landmark file holds no pairs.")
+    return np.array(pairs, dtype=np.int64)

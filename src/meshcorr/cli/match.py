@@ -94,6 +94,16 @@ def add_parser(sub) -> None:
                    help="refine the map by ZoomOut spectral upsampling (default: on)")
     g.add_argument("--refine-k", type=int, default=REFINE_K, metavar="K",
                    help=f"Laplace-Beltrami basis size the refinement ends with (default: {REFINE_K})")
+    g.add_argument("--landmarks", metavar="FILE", dest="landmarks_file",
+                   help="vertices known to correspond: one 'source_index target_index' pair a line, "
+                        "0-based; they settle the left/right choice and are mapped exactly "
+                        "(the Nystrom sample count, once --landmarks N, is --samples N)")
+    g.add_argument("--landmarks-vts", nargs=2, metavar=("SOURCE.vts", "TARGET.vts"),
+                   help="landmarks as a TOSCA-style .vts pair instead: line k of each file is the "
+                        "1-based vertex of landmark k on that mesh")
+    g.add_argument("--no-extremities", dest="extremities", action="store_false",
+                   help="do not try maps started from matched shape extremities (faster; they are "
+                        "what holds when the shapes' proportions differ)")
     g.add_argument("--anchor-scale", choices=("embedding", "geodesic"), default="embedding",
                    help="scale of the anchor term: the embedding's length scale, or geodesics divided "
                         "by the largest one as in the paper (default: embedding)")
@@ -104,7 +114,6 @@ def add_parser(sub) -> None:
                         f"{SCALABLE_ABOVE} vertices if it fits in --max-memory, else scalable (default: auto)")
     s.add_argument("--samples", type=int, default=N_SAMPLES, dest="n_samples", metavar="N",
                    help=f"Nystrom samples (landmark vertices) of the scalable mode (default: {N_SAMPLES})")
-    s.add_argument("--landmarks", metavar="FILE", dest="landmarks_file", help=argparse.SUPPRESS)
     s.add_argument("--scalable-above", type=int, default=SCALABLE_ABOVE, metavar="N",
                    help=f"--mode auto: the scalable mode from this many vertices on (default: {SCALABLE_ABOVE})")
     s.add_argument("--max-memory", metavar="SIZE", default=None,
@@ -154,12 +163,13 @@ def run(args) -> int:
     from .. import match
     from ..io import check_outputs, staged_writes, write_map
 
-    if args.landmarks_file is not None:
-        if args.landmarks_file.strip().isdigit():
-            raise ParameterError(f"--landmarks N was renamed --samples N (the Nystrom sample count of the "
-                                 f"scalable mode): use --samples {args.landmarks_file.strip()}.")
-        raise ParameterError("--landmarks FILE (user landmark pairs) is not supported yet; for the Nystrom "
-                             "sample count use --samples N.")
+    if (args.landmarks_file is not None and args.landmarks_file.strip().isdigit()
+            and not os.path.isfile(args.landmarks_file)):
+        raise ParameterError(f"--landmarks N was renamed --samples N (the Nystrom sample count of the "
+                             f"scalable mode): use --samples {args.landmarks_file.strip()}. --landmarks "
+                             "now takes a FILE of corresponding vertex pairs.")
+    if args.landmarks_file is not None and args.landmarks_vts:
+        raise ParameterError("Give the landmarks once: --landmarks FILE or --landmarks-vts A.vts B.vts.")
     if args.output is None and not args.json:
         raise ParameterError("Give -o MAP for the map (or -o - for stdout), or --json for the summary only.")
     if args.output == "-" and args.json:
@@ -169,8 +179,11 @@ def run(args) -> int:
                              "(or score the map with 'meshcorr evaluate').")
     inputs = {"SOURCE": args.source, "TARGET": args.target}
     inputs.update({f"--gt {gt}": gt for gt in args.gt or () if gt != "identity"})
+    inputs.update({"--landmarks": args.landmarks_file} if args.landmarks_file else {})
+    inputs.update({f"--landmarks-vts {v}": v for v in args.landmarks_vts or ()})
     check_outputs({"-o": args.output, "--alternative-out": args.alternative_out, "--report": args.report},
                   inputs)
+    landmarks = _read_landmarks(args)
     if args.verbose:
         print(f"meshcorr: matching {args.source} -> {args.target}", file=sys.stderr)
     result = match(args.source, args.target, symmetry=args.symmetry, refine=args.refine,
@@ -183,7 +196,8 @@ def run(args) -> int:
                                                f"{os.path.basename(args.target)}"),
                    method=args.method, prealign=args.prealign, mode=args.mode,
                    n_samples=args.n_samples, max_memory=args.max_memory,
-                   scalable_above=args.scalable_above, refine_k=args.refine_k)
+                   scalable_above=args.scalable_above, refine_k=args.refine_k, landmarks=landmarks,
+                   extremities=args.extremities)
     if args.alternative_out and result.alternative_map is None:
         raise ParameterError(f"No alternative map to write to {args.alternative_out}: only the spectral "
                              "method with at least two eigenvector configurations has one.")
@@ -214,6 +228,25 @@ def run(args) -> int:
             if path:
                 print(f"meshcorr: wrote the {what} {path}", file=sys.stderr)
     return 0
+
+
+def _read_landmarks(args):
+    """The ``(L, 2)`` landmark pairs of ``--landmarks`` or ``--landmarks-vts``, or None."""
+    from ..landmark_map import read_landmarks
+
+    if args.landmarks_file is not None:
+        return read_landmarks(args.landmarks_file)
+    if args.landmarks_vts:
+        import numpy as np
+
+        from ..ground_truth import read_vts
+
+        a, b = (read_vts(path) for path in args.landmarks_vts)
+        if len(a) != len(b):
+            raise ParameterError(f"--landmarks-vts: {args.landmarks_vts[0]} has {len(a)} lines and "
+                                 f"{args.landmarks_vts[1]} has {len(b)}; line k of each must be landmark k.")
+        return np.stack([a, b], axis=1)
+    return None
 
 
 def _write_report(args, mapping, summary: dict) -> None:

@@ -1,0 +1,80 @@
+"""``meshcorr match --landmarks FILE`` and ``--landmarks-vts`` (issue 12)."""
+
+import numpy as np
+import pytest
+import trimesh
+
+from meshcorr import datasets
+from meshcorr.cli import main
+from meshcorr.landmark_map import read_landmarks
+from meshcorr.errors import InputError
+
+
+@pytest.fixture(scope="module")
+def meshes(tmp_path_factory):
+    """A creature and a rotated, re-indexed copy; truth[i] is the copy's vertex of vertex i."""
+    folder = tmp_path_factory.mktemp("landmarks")
+    shape = datasets.creature(resolution=1)
+    copy, truth = datasets.rigid_copy(shape, random_state=4)
+    paths = []
+    for name, s in (("a.off", shape), ("b.off", copy)):
+        trimesh.Trimesh(np.asarray(s.vertices), np.asarray(s.faces), process=False).export(folder / name)
+        paths.append(str(folder / name))
+    return folder, paths, np.asarray(truth)
+
+
+def test_landmark_file_pairs_are_mapped_exactly(meshes, tmp_path):
+    folder, (a, b), truth = meshes
+    picks = [3, 40, 200]
+    # The third pair is deliberately off by one vertex: the map must follow the user.
+    pairs = [(3, truth[3]), (40, truth[40]), (200, truth[201])]
+    (tmp_path / "pairs.txt").write_text("# source target\n" + "".join(f"{i} {j}\n" for i, j in pairs))
+    out = tmp_path / "map.txt"
+    assert main(["match", a, b, "-o", str(out), "--landmarks", str(tmp_path / "pairs.txt"), "-q"]) == 0
+    mapping = np.loadtxt(out, dtype=np.int64)
+    assert [int(mapping[i]) for i in picks] == [int(j) for _, j in pairs]
+    assert np.mean(mapping == truth) > 0.95
+
+
+def test_landmarks_as_a_vts_pair(meshes, tmp_path):
+    folder, (a, b), truth = meshes
+    picks = np.array([5, 60, 300])
+    (tmp_path / "a.vts").write_text("".join(f"{i + 1}\n" for i in picks))
+    (tmp_path / "b.vts").write_text("".join(f"{truth[i] + 1}\n" for i in picks))
+    out = tmp_path / "map.npy"
+    assert main(["match", "--landmarks-vts", str(tmp_path / "a.vts"), str(tmp_path / "b.vts"), a, b,
+                 "-o", str(out), "-q"]) == 0
+    mapping = np.load(out)
+    assert np.array_equal(mapping[picks], truth[picks])
+
+
+def test_a_bad_landmark_line_names_the_file_and_line(meshes, tmp_path, capsys):
+    folder, (a, b), _ = meshes
+    (tmp_path / "pairs.txt").write_text("1 2\n3 x\n")
+    assert main(["match", a, b, "-o", str(tmp_path / "m.txt"), "--landmarks", str(tmp_path / "pairs.txt")]) == 3
+    err = capsys.readouterr().err
+    assert "pairs.txt, line 2" in err and not (tmp_path / "m.txt").exists()
+
+
+def test_an_out_of_range_landmark_is_refused_before_the_work(meshes, tmp_path, capsys):
+    folder, (a, b), _ = meshes
+    (tmp_path / "pairs.txt").write_text("1 2\n3 99999\n")
+    code = main(["match", a, b, "-o", str(tmp_path / "m.txt"), "--landmarks", str(tmp_path / "pairs.txt")])
+    assert code in (2, 3) and "outside the target" in capsys.readouterr().err
+
+
+def test_landmarks_given_twice_is_a_usage_error(meshes, tmp_path, capsys):
+    folder, (a, b), _ = meshes
+    (tmp_path / "p.txt").write_text("1 2\n")
+    code = main(["match", a, b, "-o", str(tmp_path / "m.txt"), "--landmarks", str(tmp_path / "p.txt"),
+                 "--landmarks-vts", str(tmp_path / "p.txt"), str(tmp_path / "p.txt")])
+    assert code == 2 and "Give the landmarks once" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("text, message", [("", "holds no pairs"), ("1 2 3\n", "line 1"),
+                                           ("\xff\xfe\n", "plain text")])
+def test_read_landmarks_refuses_malformed_files(tmp_path, text, message):
+    path = tmp_path / "p.txt"
+    path.write_bytes(text.encode("latin-1"))
+    with pytest.raises(InputError, match=message):
+        read_landmarks(path)

@@ -372,5 +372,13 @@ def test_cli_help_lists_the_methods(capsys):
     with pytest.raises(SystemExit):
         main(["match", "--help"])
     text = capsys.readouterr().out
-    for word in ("--method", "--no-prealign", "shape-context", "tps-rpm", "Rangarajan", "ignored"):
+    for word in ("--method", "--no-prealign", "shape-context", "tps-rpm", "Rangarajan", "is\nrefused (exit 2)"):
         assert word in text
+
+
+def test_cli_refuses_an_option_the_method_does_not_use(shape, tmp_path, capsys):
+    src = tmp_path / "a.off"
+    trimesh.Trimesh(shape.vertices, shape.faces, process=False).export(src)
+    code = main(["match", str(src), str(src), "-o", str(tmp_path / "m.txt"), "--method", "icp", "-k", "9", "-q"])
+    assert code == 2 and "'icp' does not use the option 'k'" in capsys.readouterr().err
+    assert not (tmp_path / "m.txt").exists()

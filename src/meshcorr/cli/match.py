@@ -30,8 +30,9 @@ Rangarajan 2003), icp (robust similarity ICP, Besl & McKay 1992) or
 shape-context (3D shape contexts, Belongie et al. 2002 / Frome et al. 2004).
 The Shapiro-Brady variants use -k, --geodesic, --bijective and
 --largest-component; the spatial ones (tps-rpm, icp, shape-context) use
---bijective, --largest-component, --seed and --no-prealign. Options that do
-not apply to the chosen method are ignored.
+--bijective, --largest-component, --seed and --no-prealign. An option set to
+a value other than its default that the chosen method does not use is
+refused (exit 2), naming it.
 
 Meshes: OFF, OBJ, PLY or STL triangle meshes (vertex order is kept as in the
 file; the README's "Reading meshes: input rules" says what is checked).

@@ -26,8 +26,11 @@ def meshes(tmp_path_factory):
 def test_landmark_file_pairs_are_mapped_exactly(meshes, tmp_path):
     folder, (a, b), truth = meshes
     picks = [3, 40, 200]
-    # The third pair is deliberately off by one vertex: the map must follow the user.
-    pairs = [(3, truth[3]), (40, truth[40]), (200, truth[201])]
+    # The third pair is deliberately off by one edge: the map must follow the user there.
+    faces = trimesh.load(b, process=False).faces
+    ring = np.unique(faces[np.any(faces == truth[200], axis=1)])
+    neighbour = int(ring[ring != truth[200]][0])
+    pairs = [(3, truth[3]), (40, truth[40]), (200, neighbour)]
     (tmp_path / "pairs.txt").write_text("# source target\n" + "".join(f"{i} {j}\n" for i, j in pairs))
     out = tmp_path / "map.txt"
     assert main(["match", a, b, "-o", str(out), "--landmarks", str(tmp_path / "pairs.txt"), "-q"]) == 0

@@ -67,6 +67,8 @@ from .mesh import Mesh
 #: Target vertex count above which the final all-vertices search prunes by
 #: cells (:func:`_nearest_rows_pruned`, exact) instead of brute force.
 PRUNE_ABOVE = 20_000
+#: Sampled pairs each known landmark pair counts as in every ZoomOut fit (see :func:`zoomout`).
+LANDMARK_WEIGHT = 20
 
 
 def laplace_basis(mesh: Mesh, k: int, *, random_state: int | None = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -207,7 +209,8 @@ def _nearest_rows_pruned(queries: np.ndarray, points: np.ndarray, *, n_cells: in
 
 def zoomout(source_basis: np.ndarray, target_basis: np.ndarray, mapping: np.ndarray, *,
             k_start: int = 16, step: int = 2, n_sample: int = 500, bijective: bool = False,
-            random_state: int | None = 0) -> tuple[np.ndarray, list[dict]]:
+            random_state: int | None = 0, landmarks: np.ndarray | None = None
+            ) -> tuple[np.ndarray, list[dict]]:
     """Refine a vertex map by spectral upsampling (module docstring).
 
     Parameters
@@ -233,6 +236,10 @@ def zoomout(source_basis: np.ndarray, target_basis: np.ndarray, mapping: np.ndar
         space (needs ``n1 == n2``).
     random_state : int or None
         Seed of the samples.
+    landmarks : (L, 2) int, optional
+        Known (source vertex, target vertex) pairs: each is added to every
+        fit as :data:`LANDMARK_WEIGHT` sampled pairs, so the functional map
+        keeps them (a soft constraint; the caller pins them in the final map).
 
     Returns
     -------
@@ -262,10 +269,13 @@ def zoomout(source_basis: np.ndarray, target_basis: np.ndarray, mapping: np.ndar
     C = None
     for k in list(range(k_start, K, step)) + [K]:
         A, B = source_basis[s1, :k], target_basis[images, :k]
+        if landmarks is not None:  # known pairs weigh in every fit as LANDMARK_WEIGHT sampled pairs each
+            A = np.vstack([A, np.repeat(source_basis[landmarks[:, 0], :k], LANDMARK_WEIGHT, axis=0)])
+            B = np.vstack([B, np.repeat(target_basis[landmarks[:, 1], :k], LANDMARK_WEIGHT, axis=0)])
         # The orthogonal C closest to the least-squares fit of A C = B (Procrustes).
         U, _, Vt = np.linalg.svd(A.T @ B)
         C = U @ Vt
-        new = s2[_nearest_rows(A @ C, target_basis[s2, :k])]
+        new = s2[_nearest_rows(A[:len(s1)] @ C, target_basis[s2, :k])]
         history.append({"k": int(k), "changed": float(np.mean(new != images))})
         images = new
     queries = source_basis @ C
@@ -390,7 +400,8 @@ def prefetch_bases(source: Mesh, target: Mesh, k: int, *, random_state: int | No
 
 def refine_map(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40, k_start: int = 16,
                step: int = 2, n_sample: int = 500, bijective: bool = False,
-               random_state: int | None = 0) -> tuple[np.ndarray, list[dict]]:
+               random_state: int | None = 0, landmarks: np.ndarray | None = None
+               ) -> tuple[np.ndarray, list[dict]]:
     """ZoomOut refinement of a vertex map between two meshes.
 
     Parameters
@@ -400,7 +411,7 @@ def refine_map(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40, 
         ``mapping[i]`` is the target vertex of source vertex i.
     k : int
         Final Laplace-Beltrami basis size (clipped to the vertex counts).
-    k_start, step, n_sample, bijective, random_state
+    k_start, step, n_sample, bijective, random_state, landmarks
         See :func:`zoomout`.
 
     Returns
@@ -421,4 +432,4 @@ def refine_map(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40, 
     phi1, phi2 = parallel_map(lambda mesh: laplace_basis(mesh, k, random_state=random_state)[1],
                               (source, target))
     return zoomout(phi1, phi2, mapping, k_start=min(k_start, k), step=step, n_sample=n_sample,
-                   bijective=bijective, random_state=random_state)
+                   bijective=bijective, random_state=random_state, landmarks=landmarks)

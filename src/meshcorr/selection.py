@@ -36,11 +36,14 @@ one that the following energies prefer:
 - **regional orientation** (:func:`meshcorr.orientation.regional_orientation`):
   the orientation score of the worst of 12 regions; reported, so that a
   partly mirrored result can be seen in ``--json``.
-- **landmark error**: with user landmarks, the mean geodesic distance on the
-  target (divided by its largest geodesic) between where the map sends each
-  landmark and where the user says it goes; maps within
-  :data:`LANDMARK_TOLERANCE` of the best are kept before the rules above.
-  Landmark vertices are then mapped exactly to their partners.
+- **landmarks kept**: with user landmarks, the fraction of them that the map
+  sends within :data:`LANDMARK_RADIUS` (of the target's largest geodesic
+  distance) of where the user says they go; only the maps that keep the
+  most are considered by the rules above. A count, not a mean distance: one
+  landmark in a region every map gets wrong must not outweigh the others
+  (measured: a gorilla -> man pair whose mirrored map had the smaller mean).
+  ``landmark_error``, the mean of those distances, is reported. Landmark
+  vertices are then mapped exactly to their partners.
 
 Measured on TOSCA, TOSCA gorilla -> human and SHREC'07 pairs in
 ``benchmarks/RESULTS-robustness.md``.
@@ -62,8 +65,8 @@ ORIENTATION_MIN = 0.6
 N_DISTORTION_SOURCES = 24
 #: Exponent of the curvature disagreement in the energy a map is chosen by.
 CURVATURE_POWER = 3
-#: Maps whose landmark error is within this (normalised geodesic distance) of the best one are kept.
-LANDMARK_TOLERANCE = 0.02
+#: A landmark is kept by a map that sends it within this (normalised geodesic distance) of its partner.
+LANDMARK_RADIUS = 0.05
 
 
 @dataclass
@@ -79,7 +82,7 @@ class MapCandidate:
         ``"landmarks"``.
     mapping : (n1,) int
         Source vertex -> target vertex, local numbering.
-    orientation, distortion, curvature, regional_orientation, landmark_error : float
+    orientation, distortion, curvature, regional_orientation, landmark_error, landmarks_kept : float
         The energies of the module docstring (NaN where not measured).
     extra : dict
         ``extremity_energy`` for extremity maps.
@@ -92,6 +95,7 @@ class MapCandidate:
     curvature: float = np.nan
     regional_orientation: float = np.nan
     landmark_error: float = np.nan
+    landmarks_kept: float = np.nan
     extra: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
@@ -102,6 +106,7 @@ class MapCandidate:
                 "distortion": rounded(self.distortion, 5), "curvature": rounded(self.curvature),
                 "regional_orientation": rounded(self.regional_orientation),
                 "landmark_error": rounded(self.landmark_error, 5),
+                "landmarks_kept": rounded(self.landmarks_kept),
                 **{key: rounded(value, 5) for key, value in self.extra.items()}}
 
 
@@ -137,8 +142,9 @@ def score_candidates(candidates: list[MapCandidate], source, target, source_geod
             candidate.regional_orientation = float(
                 regional_orientation(source, target, mapping, random_state=random_state).min())
         if landmarks is not None:
-            candidate.landmark_error = float(np.mean(
-                [target_geodesics(int(b))[mapping[a]] for a, b in landmarks]))
+            errors = np.array([target_geodesics(int(b))[mapping[a]] for a, b in landmarks])
+            candidate.landmark_error = float(errors.mean())
+            candidate.landmarks_kept = float(np.mean(errors <= LANDMARK_RADIUS))
 
 
 def choose_map(candidates: list[MapCandidate], *, reliable: bool
@@ -161,9 +167,9 @@ def choose_map(candidates: list[MapCandidate], *, reliable: bool
         distorted other candidate); None if there is none.
     """
     pool = list(candidates)
-    if all(np.isfinite(c.landmark_error) for c in pool):
-        best = min(c.landmark_error for c in pool)
-        pool = [c for c in pool if c.landmark_error <= best + LANDMARK_TOLERANCE]
+    if all(np.isfinite(c.landmarks_kept) for c in pool):
+        best = max(c.landmarks_kept for c in pool)
+        pool = [c for c in pool if c.landmarks_kept == best]
     if reliable:
         pool = [c for c in pool if c.orientation >= ORIENTATION_MIN] or pool
     chosen = min(pool, key=lambda c: energy(c, reliable))

@@ -8,7 +8,8 @@ concatenates them under one index so every result is in one place.
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-ORDER = ["core", "baselines", "evaluation", "scale", "front", "refine", "symmetry", "viz"]
+ORDER = ["core", "baselines", "evaluation", "scale", "front", "refine", "symmetry", "viz", "robustness",
+         "robustness-trials", "collections", "reliability", "tests", "texture"]
 TITLES = {
     "core": "Core dense pipeline on TOSCA (issue 2)",
     "baselines": "The paper's baselines vs spectral (issue 3)",
@@ -18,6 +19,12 @@ TITLES = {
     "refine": "Speed of the ZoomOut refinement, old vs new (issue 5)",
     "symmetry": "Left/right mirror and refinement (issue 6)",
     "viz": "Pictures and report (issue 4)",
+    "robustness": "Right maps on data nobody tuned for, against pyFM (issue 12)",
+    "robustness-trials": "What was tried for the whole-map choice (issue 12)",
+    "collections": "Shape collections: prepare once, batch on Dask (issue 13)",
+    "reliability": "Reliability: interrupts, fuzzing, soak (issue 16)",
+    "tests": "Tests that notice broken code: mutation runs (issue 17)",
+    "texture": "Texture transfer through the precise map (issue 14)",
 }
 
 

@@ -161,3 +161,15 @@ def test_a_landmark_on_a_removed_component_is_refused():
     with pytest.raises(ParameterError, match="component that was removed"):
         check_landmarks([(len(vertices) - 1, 0)], mesh, mesh)
     assert check_landmarks([(3, 4)], mesh, mesh).tolist() == [[3, 4]]
+
+
+def test_the_matching_cost_is_kept_when_the_whole_map_choice_keeps_the_spectral_map():
+    shape = datasets.creature(resolution=1)
+    copy, _ = datasets.rigid_copy(shape, random_state=2)
+    result = meshcorr.match((shape.vertices, shape.faces), (copy.vertices, copy.faces), refine=False)
+    chosen = [c for c in result.map_candidates if c["chosen"]][0]
+    assert chosen["origin"] == "spectral"
+    assert result.cost is not None and np.isfinite(result.cost).all()
+    pinned = meshcorr.match((shape.vertices, shape.faces), (copy.vertices, copy.faces), refine=False,
+                            landmarks=[(0, int(result.map[0]))])
+    assert pinned.cost is None  # a pinned landmark is no longer the proximity matching's map

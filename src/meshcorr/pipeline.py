@@ -228,19 +228,20 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
     # Whole-map choice: the spectral map against maps from matched extremities
     # and from the user's landmarks, each refined alike (meshcorr.selection).
     local_map, other_map, map_candidates = chosen.mapping, None if other is None else other.mapping, []
+    spectral_kept = True
     if symmetry == "auto" and (extremities or pairs is not None):
         with timer.stage("whole-map"):
-            local_map, other_map, map_candidates = _whole_map_choice(
+            local_map, other_map, map_candidates, spectral_kept = _whole_map_choice(
                 src, tgt, spectra, chosen.mapping, other_map, pairs, extremities=extremities, refine=refine,
                 refine_k=refine_k, bijective=bijective, reliable=reliable, random_state=random_state)
     icp, anchors = chosen.extra["icp"], chosen.extra["anchors"]
-    local_cost = chosen.extra["cost"] if local_map is chosen.mapping else None
 
     full_map = np.full(src.n_original, -1, dtype=np.int64)
     full_map[src.kept] = tgt.kept[local_map]
-    full_cost = np.full(src.n_original, np.nan)
-    if not refine and local_cost is not None:
-        full_cost[src.kept] = local_cost
+    full_cost = None  # the matching cost means something only for the unrefined spectral map
+    if not refine and spectral_kept:
+        full_cost = np.full(src.n_original, np.nan)
+        full_cost[src.kept] = chosen.extra["cost"]
     alternative_map = None
     if other_map is not None:
         alternative_map = np.full(src.n_original, -1, dtype=np.int64)
@@ -256,7 +257,7 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
                   landmarks=None if pairs is None else np.stack([src.kept[pairs[:, 0]], tgt.kept[pairs[:, 1]]],
                                                                 axis=1).tolist())
     return Correspondence(
-        map=full_map, cost=None if refine or local_cost is None else full_cost, source=src, target=tgt,
+        map=full_map, cost=full_cost, source=src, target=tgt,
         source_vertices=src.kept.copy(), target_vertices=tgt.kept.copy(),
         source_embedding=X, target_embedding=Y_configured, aligned_target_embedding=icp.warped,
         eigenvalues={"source": spectra[0].eigenvalues, "target": spectra[1].eigenvalues}, configuration=chosen.configuration,
@@ -275,7 +276,9 @@ def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, s
     """Candidate maps from extremities and landmarks, scored with the spectral map; the winner.
 
     Returns the chosen local map, the alternative (the least distorted map of
-    the other orientation, else the spectral alternative) and every candidate's scores.
+    the other orientation, else the spectral alternative), every candidate's
+    scores, and whether the chosen map is the spectral map unchanged (not
+    another candidate, no landmark pinned).
     """
     g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
     starts: list[tuple[str, np.ndarray, dict]] = []
@@ -304,7 +307,7 @@ def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, s
         mapping[pairs[:, 0]] = pairs[:, 1]
     other = alternative.mapping if alternative is not None else spectral_other
     summaries = [dict(c.to_dict(), chosen=c is chosen, alternative=c is alternative) for c in candidates]
-    return mapping, other, summaries
+    return mapping, other, summaries, chosen.origin == "spectral" and pairs is None
 
 
 def _chosen_first(configurations: list[Configuration], chosen: Candidate,

@@ -101,16 +101,32 @@ def identity_truth(n_source: int, n_target: int) -> GroundTruth:
     return GroundTruth(index, index, "identity")
 
 
-def _read_lines(path: Path) -> list[tuple[int, str]]:
+def read_index_lines(path: Path, kind: str = "ground-truth") -> list[tuple[int, str]]:
+    """The non-blank lines of a plain-text index file, ``#`` comments removed, with their numbers.
+
+    Raises :class:`InputError` naming ``kind`` for a missing or non-text file;
+    an empty list for a file with no data lines.
+    """
     if not path.is_file():
-        raise InputError(f"No such ground-truth file: {path}" if not path.exists()
-                             else f"Not a file: {path}")
+        raise InputError(f"No such {kind} file: {path}" if not path.exists() else f"Not a file: {path}")
     try:
         text = path.read_text(encoding="ascii")
     except UnicodeDecodeError as exc:
-        raise InputError(f"{path}: a ground-truth file must be plain text.") from exc
+        raise InputError(f"{path}: a {kind} file must be plain text.") from exc
     lines = [(number, line.split("#", 1)[0].strip()) for number, line in enumerate(text.splitlines(), 1)]
-    lines = [(number, line) for number, line in lines if line]
+    return [(number, line) for number, line in lines if line]
+
+
+def index_fields(line: str) -> list[int] | None:
+    """The integers of a line split at spaces, commas, colons or semicolons; None if one is not an integer."""
+    fields = [f for f in re.split(r"[\s,:;]+", line) if f]
+    if not all(re.fullmatch(r"[+-]?\d{1,18}", f) for f in fields):
+        return None
+    return [int(f) for f in fields]
+
+
+def _read_lines(path: Path) -> list[tuple[int, str]]:
+    lines = read_index_lines(path)
     if not lines:
         raise InputError(f"{path}: the ground-truth file is empty.")
     return lines
@@ -180,11 +196,11 @@ def read_pairs(path) -> GroundTruth:
     path = Path(path)
     rows = []
     for number, line in _read_lines(path):
-        fields = [f for f in re.split(r"[\s,:;]+", line) if f]
-        if not 1 <= len(fields) <= 2 or not all(re.fullmatch(r"[+-]?\d{1,18}", f) for f in fields):
+        values = index_fields(line)
+        if values is None or not 1 <= len(values) <= 2:
             raise InputError(f"{path}, line {number}: expected a 0-based vertex pair 'i j' "
                              f"(or one index per line); got {line[:40]!r}.")
-        rows.append((number, [int(f) for f in fields]))
+        rows.append((number, values))
     widths = {len(values) for _, values in rows}
     if len(widths) > 1:
         odd = next(number for number, values in rows if len(values) != len(rows[0][1]))

@@ -21,7 +21,6 @@ spread) and is meant to be refined (:mod:`meshcorr.refine`).
 from __future__ import annotations
 
 import os
-import re
 from pathlib import Path
 from typing import Callable
 
@@ -29,6 +28,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .errors import InputError, ParameterError
+from .ground_truth import index_fields, read_index_lines
 from .mesh import Mesh
 
 RowFn = Callable[[int], np.ndarray]
@@ -146,21 +146,13 @@ def read_landmarks(path: str | os.PathLike) -> np.ndarray:
         (named by its number).
     """
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"No such landmark file: {path}" if not path.exists() else f"Not a file: {path}")
-    try:
-        text = path.read_text(encoding="ascii")
-    except UnicodeDecodeError as exc:
-        raise InputError(f"{path}: a landmark file must be plain text (one 'i j' pair a line).") from exc
     pairs = []
-    for number, line in enumerate(text.splitlines(), 1):
-        fields = [f for f in re.split(r"[\s,:;]+", line.split("#", 1)[0].strip()) if f]
-        if not fields:
-            continue
-        if len(fields) != 2 or not all(re.fullmatch(r"[+-]?\d{1,18}", f) for f in fields):
+    for number, line in read_index_lines(path, kind="landmark"):
+        values = index_fields(line)
+        if values is None or len(values) != 2:
             raise InputError(f"{path}, line {number}: expected a 0-based vertex pair 'source_index "
-                             f"target_index'; got {line.strip()[:40]!r}.")
-        pairs.append((int(fields[0]), int(fields[1])))
+                             f"target_index'; got {line[:40]!r}.")
+        pairs.append(values)
     if not pairs:
         raise InputError(f"{path}: the landmark file holds no pairs.")
     return np.array(pairs, dtype=np.int64)

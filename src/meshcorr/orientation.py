@@ -47,6 +47,7 @@ from scipy.spatial import cKDTree
 
 from ._params import check_int
 from .errors import ParameterError
+from .landmarks import farthest_point_sampling
 from .mesh import Mesh
 
 
@@ -304,11 +305,8 @@ def regional_orientation(source: Mesh, target: Mesh, mapping: np.ndarray, *, n_r
     sample, triple, areas = _orientation_signs(source, target, np.asarray(mapping), n_neighbors, n_sample,
                                                random_state)
     points = source.vertices[sample]
-    seeds = [0]
-    nearest = np.linalg.norm(points - points[0], axis=1)
-    for _ in range(min(n_regions, len(points)) - 1):
-        seeds.append(int(np.argmax(nearest)))
-        nearest = np.minimum(nearest, np.linalg.norm(points - points[seeds[-1]], axis=1))
+    seeds = farthest_point_sampling(lambda i: np.linalg.norm(points - points[i], axis=1), len(points),
+                                    min(n_regions, len(points)), start=0).indices
     region = cKDTree(points[seeds]).query(points)[1]
     w = areas * (triple != 0)
     kept = np.bincount(region, weights=w * (triple > 0), minlength=len(seeds))

@@ -57,7 +57,7 @@ import numpy as np
 
 from .curvature import curvature_disagreement
 from .orientation import orientation_score, regional_orientation
-from .symmetry import metric_distortion
+from .symmetry import _rounded, metric_distortion
 
 #: Maps of orientation score below this are set aside when one above exists.
 ORIENTATION_MIN = 0.6
@@ -99,15 +99,12 @@ class MapCandidate:
     extra: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
-        def rounded(value, digits=4):
-            return None if not np.isfinite(value) else round(float(value), digits)
-
-        return {"origin": self.origin, "orientation": rounded(self.orientation),
-                "distortion": rounded(self.distortion, 5), "curvature": rounded(self.curvature),
-                "regional_orientation": rounded(self.regional_orientation),
-                "landmark_error": rounded(self.landmark_error, 5),
-                "landmarks_kept": rounded(self.landmarks_kept),
-                **{key: rounded(value, 5) for key, value in self.extra.items()}}
+        return {"origin": self.origin, "orientation": _rounded(self.orientation, 4),
+                "distortion": _rounded(self.distortion, 5), "curvature": _rounded(self.curvature, 4),
+                "regional_orientation": _rounded(self.regional_orientation, 4),
+                "landmark_error": _rounded(self.landmark_error, 5),
+                "landmarks_kept": _rounded(self.landmarks_kept, 4),
+                **{key: _rounded(value, 5) for key, value in self.extra.items()}}
 
 
 def score_candidates(candidates: list[MapCandidate], source, target, source_geodesics, target_geodesics, *,

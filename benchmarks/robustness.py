@@ -49,7 +49,10 @@ import numpy as np
 import meshcorr
 from meshcorr.benchmark import stratified_sample
 from meshcorr.evaluation import GeodesicCache, geodesic_errors
+from meshcorr.ground_truth import read_vts
+from meshcorr.landmarks import farthest_point_sampling
 from meshcorr.mesh import as_mesh
+from tosca_symmetry import pyfm_map  # the same pyFM settings as the other benchmarks
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 FIELDS = ["set", "source", "target", "method", "mean_error", "forgiven_error", "flipped", "partial",
@@ -71,18 +74,13 @@ class Pair:
     target_sym_points: np.ndarray | None
 
 
-def _vts(path: Path) -> np.ndarray:
-    """A 1-based ``.vts`` file as 0-based indices."""
-    return np.loadtxt(path, dtype=np.int64, ndmin=1) - 1
-
-
 def tosca_pairs(root: Path, set_name: str, n_pairs: int | None) -> list[Pair]:
     """TOSCA-style pairs (``test_pairs.txt``, ``corres/*.vts``, mirrored ``*.sym.vts``)."""
     listed = [tuple(line.split()) for line in (root / "test_pairs.txt").read_text().splitlines()
               if len(line.split()) == 2]
     pairs = stratified_sample(listed, n_pairs, random_state=0)
-    return [Pair(set_name, a, b, root / f"{a}.off", root / f"{b}.off", _vts(root / "corres" / f"{a}.vts"),
-                 _vts(root / "corres" / f"{b}.vts"), _vts(root / "corres" / f"{b}.sym.vts"))
+    return [Pair(set_name, a, b, root / f"{a}.off", root / f"{b}.off", read_vts(root / "corres" / f"{a}.vts"),
+                 read_vts(root / "corres" / f"{b}.vts"), read_vts(root / "corres" / f"{b}.sym.vts"))
             for a, b in pairs]
 
 
@@ -150,30 +148,9 @@ def build_sets(quick: bool) -> dict[str, list[Pair]]:
 def truth_landmarks(pair: Pair, source, count: int = N_TRUTH_LANDMARKS) -> np.ndarray:
     """``count`` truth pairs spread over the source by farthest-point sampling (Euclidean, seeded)."""
     points = np.asarray(source.vertices)[pair.source_points]
-    chosen = [0]
-    distance = np.linalg.norm(points - points[0], axis=1)
-    for _ in range(count - 1):
-        chosen.append(int(np.argmax(distance)))
-        distance = np.minimum(distance, np.linalg.norm(points - points[chosen[-1]], axis=1))
+    chosen = farthest_point_sampling(lambda i: np.linalg.norm(points - points[i], axis=1), len(points), count,
+                                     start=0).indices
     return np.stack([pair.source_points[chosen], pair.target_points[chosen]], axis=1)
-
-
-def pyfm_map(source, target, landmarks: np.ndarray | None = None) -> np.ndarray:
-    """pyFM's automatic pipeline (WKS + orientation term + ZoomOut, as in its example), source -> target."""
-    from pyFM.functional import FunctionalMapping
-    from pyFM.mesh import TriMesh
-
-    # pyFM's p2p_21 maps mesh 2's vertices to mesh 1's: mesh 2 is our source.
-    mesh1 = TriMesh(np.array(target.vertices), np.array(target.faces), area_normalize=True)
-    mesh2 = TriMesh(np.array(source.vertices), np.array(source.faces), area_normalize=True)
-    model = FunctionalMapping(mesh1, mesh2)
-    process = dict(n_descr=100, descr_type="WKS", k_process=120, subsample_step=5)
-    if landmarks is not None:
-        process["landmarks"] = np.asarray(landmarks)[:, ::-1]  # pyFM: (mesh1 vertex, mesh2 vertex)
-    model.preprocess(**process)
-    model.fit(K=(30, 30), w_descr=1e0, w_lap=1e-2, w_dcomm=1e-1, w_orient=0.1)
-    fm = model.zoomout_refine(nit=15, step=5, subsample=1000)
-    return np.asarray(model.get_p2p(fm), dtype=np.int64)
 
 
 def score(pair: Pair, target, mapping: np.ndarray, cache: GeodesicCache) -> dict:

@@ -55,9 +55,13 @@ FIELDS = ["source", "target", "class", "method", "mean_error", "sym_mean_error",
           "chosen_rank", "n_candidates", "orientation_chosen", "orientation_alternative"]
 
 
-def pyfm_map(source, target, *, k_process: int = 120, k_fit: int = 30, zoomout_steps: int = 15,
-             w_orient: float = 0.1) -> np.ndarray:
-    """pyFM's automatic pipeline, source vertex -> target vertex (see the module docstring)."""
+def pyfm_map(source, target, landmarks: np.ndarray | None = None, *, k_process: int = 120, k_fit: int = 30,
+             zoomout_steps: int = 15, w_orient: float = 0.1) -> np.ndarray:
+    """pyFM's automatic pipeline, source vertex -> target vertex (see the module docstring).
+
+    ``landmarks``: optional (L, 2) (source vertex, target vertex) pairs, given to pyFM's
+    preprocessing as landmark descriptors.
+    """
     from pyFM.functional import FunctionalMapping
     from pyFM.mesh import TriMesh
 
@@ -65,7 +69,10 @@ def pyfm_map(source, target, *, k_process: int = 120, k_fit: int = 30, zoomout_s
     mesh1 = TriMesh(np.array(target.vertices), np.array(target.faces), area_normalize=True)
     mesh2 = TriMesh(np.array(source.vertices), np.array(source.faces), area_normalize=True)
     model = FunctionalMapping(mesh1, mesh2)
-    model.preprocess(n_descr=100, descr_type="WKS", k_process=k_process, subsample_step=5)
+    process = dict(n_descr=100, descr_type="WKS", k_process=k_process, subsample_step=5)
+    if landmarks is not None:
+        process["landmarks"] = np.asarray(landmarks)[:, ::-1]  # pyFM: (mesh1 vertex, mesh2 vertex)
+    model.preprocess(**process)
     model.fit(K=(k_fit, k_fit), w_descr=1e0, w_lap=1e-2, w_dcomm=1e-1, w_orient=w_orient)
     fm = model.zoomout_refine(nit=zoomout_steps, step=5, subsample=1000)
     return np.asarray(model.get_p2p(fm), dtype=np.int64)

@@ -50,7 +50,6 @@ from scipy.spatial import cKDTree
 from ._params import check_choice, check_int
 from .errors import ParameterError, PreparedShapeError
 from .geodesics import GEODESIC_METHODS
-from .io import atomic_write
 from .mesh import Mesh, MeshLike, as_mesh
 from .modes import MODES, N_SAMPLES, SCALABLE_ABOVE, build_spectrum, resolve_memory, select_mode
 from .orientation import Orientation
@@ -152,6 +151,8 @@ class PreparedShape:
     def save(self, path) -> None:
         """Write it to ``path`` (``.npz``, the format in the module docstring), atomically."""
         payload = self.to_bytes()
+        from .io import atomic_write  # meshcorr.io imports trimesh: not at `import meshcorr`
+
         atomic_write(path, lambda file: file.write(payload))
 
     def to_bytes(self) -> bytes:

@@ -25,8 +25,10 @@ mirrored, a correct one stays correct).
 
 The basis solves :math:`L \\phi = \\lambda M \\phi` with the cotangent Laplacian
 :math:`L` and the lumped (barycentric) mass matrix :math:`M` of
-``potpourri3d``, by shift-invert Lanczos (``scipy.sparse.linalg.eigsh``), and
-is cached on the :class:`~meshcorr.mesh.Mesh` per size.
+``potpourri3d`` (of a point cloud: its Laplacian and mass from
+:mod:`meshcorr.laplacian`), by shift-invert Lanczos
+(``scipy.sparse.linalg.eigsh``), and is cached on the
+:class:`~meshcorr.mesh.Mesh` per size.
 
 Speed at 100k+ vertices (issue 5). The last step maps every source vertex
 to its nearest target vertex in the K-dimensional spectral space; brute
@@ -62,6 +64,7 @@ from ._params import check_int
 from ._threads import parallel_map, single_blas_thread, wait_for
 from .embedding import deterministic_start, sign_convention
 from .errors import ParameterError
+from .laplacian import laplacian
 from .mesh import Mesh
 
 #: Target vertex count above which the final all-vertices search prunes by
@@ -101,17 +104,13 @@ class _Cancelled(Exception):
 def _laplace_basis(mesh: Mesh, k: int, random_state: int | None,
                    cancel: threading.Event | None) -> tuple[np.ndarray, np.ndarray]:
     """:func:`laplace_basis`; raises :class:`_Cancelled` between two solves once ``cancel`` is set."""
-    import potpourri3d as pp3d
-
     n = mesh.n_vertices
     k = check_int("refine_k", k, minimum=2, maximum=max(2, n - 1))
     key = ("laplace_basis", k, random_state)
     if key not in mesh._cache:
-        V, F = np.asarray(mesh.vertices), np.asarray(mesh.faces)
-        L = pp3d.cotan_laplacian(V, F).tocsc()
+        L, mass = laplacian(mesh)  # cotangent Laplacian, or a point cloud's (meshcorr.laplacian)
         # Unit total area: bases of meshes of different sizes are then comparable
         # (an orthogonal functional map cannot absorb a scale factor).
-        mass = pp3d.vertex_areas(V, F)
         mass = mass / mass.sum()
         M = sp.diags(mass).tocsc()
         # A tiny negative shift keeps the shift-inverted operator non-singular

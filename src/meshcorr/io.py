@@ -596,9 +596,10 @@ def write_mesh(path, vertices, faces, vertex_colors=None) -> None:
     Parameters
     ----------
     path : str or os.PathLike
-        Target file ending in .off, .obj, .ply or .stl.
+        Target file ending in .off, .obj, .ply or .stl (.ply for a point cloud).
     vertices : (n, 3) float
     faces : (m, 3) int
+        ``m = 0``: a point cloud, written as a PLY of points.
     vertex_colors : (n, 3) or (n, 4) uint8, optional
         RGB(A) color per vertex.
     """
@@ -608,6 +609,13 @@ def write_mesh(path, vertices, faces, vertex_colors=None) -> None:
             f"Cannot write {path}: unsupported extension '{Path(path).suffix}'; "
             f"use one of {_SUPPORTED_LIST}."
         )
+    if np.asarray(faces).size == 0:  # a point cloud: a PLY of points (with colours)
+        if fmt != "PLY":
+            raise ParameterError(f"Cannot write {path}: a point cloud (no faces) is written as .ply.")
+        cloud = trimesh.PointCloud(np.asarray(vertices, dtype=np.float64), colors=vertex_colors)
+        payload = cloud.export(file_type="ply")
+        atomic_write(path, lambda file: file.write(payload))
+        return
     mesh = trimesh.Trimesh(
         vertices=np.asarray(vertices, dtype=np.float64),
         faces=np.asarray(faces, dtype=np.int64),

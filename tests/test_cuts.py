@@ -7,6 +7,7 @@ import trimesh
 from meshcorr import cuts, datasets
 from meshcorr.errors import ParameterError
 from meshcorr.mesh import as_mesh
+from meshcorr.validate import pinched_vertices
 
 
 @pytest.fixture(scope="module")
@@ -67,3 +68,19 @@ def test_same_seed_same_part(ball):
 def test_bad_parameters_are_refused_by_name(ball, call, message):
     with pytest.raises(ParameterError, match=message):
         call(ball)
+
+
+def test_a_cut_that_would_pinch_a_vertex_drops_the_faces_around_it(ball):
+    # Remove two opposite faces of one vertex's fan: the rest of the fan is two sheets touching at the vertex.
+    vertex = 0
+    fan = np.flatnonzero((ball.faces == vertex).any(axis=1))
+    # The fan's faces are not in cyclic order; find two that share no edge.
+    first = ball.faces[fan[0]]
+    opposite = [f for f in fan[1:] if len(np.intersect1d(ball.faces[f], first)) == 1][0]
+    keep = np.ones(len(ball.faces), dtype=bool)
+    keep[[fan[0], opposite]] = False
+    assert list(pinched_vertices(ball.faces[keep], ball.n_vertices)) == [vertex]
+    part, kept = cuts.submesh(ball, keep)
+    assert vertex not in kept
+    assert len(pinched_vertices(part.faces, part.n_vertices)) == 0
+    assert part.n_vertices == ball.n_vertices - 1

@@ -15,8 +15,10 @@ so that a ground-truth map of the whole shape restricts to the part as
 
 Faces are kept or removed by the mean of their vertices' values (height
 along the plane's normal, distance to the nearest centre), the vertices
-of no kept face are dropped, and the largest connected piece is kept (a cut can leave islands), so the result is a valid
-input to :func:`meshcorr.match`. Geodesic distances come from the heat method
+of no kept face are dropped, and the largest connected piece is kept (a
+cut can leave islands; the faces around a vertex where two sheets would
+touch are dropped too), so the result is a valid input to
+:func:`meshcorr.match`. Geodesic distances come from the heat method
 (:mod:`meshcorr.geodesics`, potpourri3d).
 """
 
@@ -30,6 +32,7 @@ from ._params import check_int
 from .errors import ParameterError
 from .geodesics import geodesic_solver
 from .mesh import Mesh, MeshLike, as_mesh
+from .validate import pinched_vertices
 
 
 def _face_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -71,6 +74,9 @@ def submesh(mesh: Mesh, keep_faces: np.ndarray, *, name: str | None = None) -> t
         Index in ``mesh`` of each vertex of ``part``.
     """
     faces = mesh.faces[np.asarray(keep_faces, dtype=bool)]
+    # Removing faces can leave two sheets touching at one vertex: drop the faces around it until none is left.
+    while len(pinched := pinched_vertices(faces, mesh.n_vertices)):
+        faces = faces[~np.isin(faces, pinched).any(axis=1)]
     if len(faces) == 0:
         raise ParameterError(f"Nothing of {mesh.name} is left to keep: keep a larger part.")
     # Face adjacency through shared vertices: face f - vertex v incidence, squared.

@@ -293,12 +293,16 @@ def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, s
     candidates = [MapCandidate("spectral", spectral_map)]
     if spectral_other is not None:  # unrefined: it is kept as the alternative, rarely chosen
         candidates.append(MapCandidate("spectral-alternative", spectral_other))
-    for origin, start, extra in starts:
+    def refined(start: tuple[str, np.ndarray, dict]) -> np.ndarray:
         # Only the landmarks' own map is held to them while refined: the others must show
         # by themselves whether they agree with the landmarks (meshcorr.selection).
+        origin, mapping, _ = start
         pins = pairs if origin == "landmarks" else None
-        mapping = (refine_map(src, tgt, start, k=refine_k, bijective=bijective, random_state=random_state,
-                              landmarks=pins)[0] if refine else start)
+        return refine_map(src, tgt, mapping, k=refine_k, bijective=bijective, random_state=random_state,
+                          landmarks=pins)[0] if refine else mapping
+
+    # Independent refinements, mostly BLAS and LAPACK: one thread per core (same maps as a loop).
+    for (origin, _, extra), mapping in zip(starts, parallel_map(refined, starts)):
         candidates.append(MapCandidate(origin, mapping, extra=extra))
     score_candidates(candidates, src, tgt, g1, g2, reliable=reliable, landmarks=pairs, random_state=random_state)
     chosen, alternative = choose_map(candidates, reliable=reliable)

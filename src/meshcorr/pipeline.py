@@ -33,6 +33,7 @@ from .mesh import Mesh, MeshLike
 from .methods import METHOD_NAMES, applicable_options, changed_options, reject_inapplicable, run_method
 from .modes import MODES, N_SAMPLES, SCALABLE_ABOVE, resolve_memory, select_mode
 from .orientation import mesh_orientation, orientation_score
+from .oriented_start import fit_oriented_map
 from .prepared import REFINE_K, PreparedShape, as_meshes, pair_shapes, pair_spectrum, shape_settings
 from .progress import as_progress
 from .refine import prefetch_bases, refine_map
@@ -288,8 +289,9 @@ def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, s
         tips = [find_extremities(mesh, spectrum.geodesics_from, length_unit=spectrum.max_geodesic,
                                  random_state=random_state) for mesh, spectrum in zip((src, tgt), spectra)]
         for rank, (energy, assignment) in enumerate(match_extremities(*tips)):
-            starts.append((f"extremities-{rank}", landmark_map(g1, g2, assignment),
-                           {"extremity_energy": energy}))
+            start = (fit_oriented_map(src, tgt, g1, g2, assignment, basis_k=refine_k, random_state=random_state)
+                     if reliable else landmark_map(g1, g2, assignment))
+            starts.append((f"extremities-{rank}", start, {"extremity_energy": energy}))
     candidates = [MapCandidate("spectral", spectral_map)]
     if spectral_other is not None:  # unrefined: it is kept as the alternative, rarely chosen
         candidates.append(MapCandidate("spectral-alternative", spectral_other))

@@ -84,6 +84,22 @@ def _face_gradients(vertices: np.ndarray, faces: np.ndarray, values: np.ndarray)
     return gradient, normal, 0.5 * double_area
 
 
+def _basis_gradients(mesh: Mesh, basis: np.ndarray) -> tuple:
+    """The basis-dependent part of :func:`orientation_operators`, cached on the mesh.
+
+    Returns the outward faces ``(m, 3)``, the unit-area vertices ``(n, 3)``,
+    the basis gradients ``(m, 3, k)``, the face normals ``(m, 3)`` and the
+    face weights ``(m, k)`` (face area times the basis averaged on the face).
+    """
+    key = ("orientation_operator_basis", basis.shape, hash(basis[::max(1, len(basis) // 64)].tobytes()))
+    if key not in mesh._cache:
+        faces = mesh_orientation(mesh).faces
+        vertices = np.asarray(mesh.vertices) / np.sqrt(mesh.area)
+        gradients, normal, area = _face_gradients(vertices, faces, basis)
+        mesh._cache[key] = (faces, vertices, gradients, normal, area[:, None] * basis[faces].mean(axis=1))
+    return mesh._cache[key]
+
+
 def orientation_operators(mesh: Mesh, basis: np.ndarray, functions: np.ndarray) -> np.ndarray:
     """``(c, k, k)``: each function's operator :math:`O^d` in ``basis`` (module docstring).
 
@@ -94,16 +110,23 @@ def orientation_operators(mesh: Mesh, basis: np.ndarray, functions: np.ndarray) 
     basis : (n, k) float
     functions : (n, c) float
     """
-    faces = mesh_orientation(mesh).faces
-    vertices = np.asarray(mesh.vertices) / np.sqrt(mesh.area)
-    grad_basis, normal, area = _face_gradients(vertices, faces, basis)
-    grad_functions, _, _ = _face_gradients(vertices, faces, functions)
-    # n x grad d, per face and function: (m, 3, c)
-    across = np.cross(normal[:, :, None], grad_functions, axis=1)
-    # <n x grad d, grad phi_b> per face: (m, c, k)
-    inner = np.einsum("mxc,mxk->mck", across, grad_basis)
-    weight = area[:, None] * basis[faces].mean(axis=1)  # (m, k): phi_a averaged on the face, times area
-    return np.einsum("ma,mcb->cab", weight, inner)
+    faces, vertices, grad_basis, normal, weight = _basis_gradients(mesh, np.asarray(basis))
+    grad_functions = _face_gradients(vertices, faces, np.asarray(functions))[0]
+    across = np.cross(normal[:, :, None], grad_functions, axis=1)  # n x grad d: (m, 3, c)
+    inner = np.matmul(across.transpose(0, 2, 1), grad_basis)       # <n x grad d, grad phi_b>: (m, c, k)
+    m, c, k = inner.shape
+    return (weight.T @ inner.reshape(m, c * k)).reshape(k, c, k).transpose(1, 0, 2)
+
+
+def _commutator_normal(o_s: np.ndarray, o_t: np.ndarray) -> np.ndarray:
+    """:math:`M^T M` for :math:`M = O_t^T \\otimes I - I \\otimes O_s`, the map ``vec(C) -> vec(C O_t - O_s C)``.
+
+    Expanded with :math:`(A \\otimes B)^T (C \\otimes D) = A^T C \\otimes B^T D`,
+    without forming the ``(k^2, k^2)`` matrix :math:`M`.
+    """
+    eye = np.eye(len(o_s))
+    return (np.kron(o_t @ o_t.T, eye) + np.kron(eye, o_s.T @ o_s)
+            - np.kron(o_t, o_s) - np.kron(o_t.T, o_s.T))
 
 
 def fit_oriented_map(source: Mesh, target: Mesh, source_geodesics: RowFn, target_geodesics: RowFn,
@@ -158,11 +181,10 @@ def fit_oriented_map(source: Mesh, target: Mesh, source_geodesics: RowFn, target
     orientation = np.zeros((k * k, k * k))
     for o_s, o_t in zip(O_s, O_t):
         norm = 0.5 * (np.linalg.norm(o_s) + np.linalg.norm(o_t)) + 1e-12
-        M = (np.kron(o_t.T, eye) - np.kron(eye, o_s)) / norm
-        orientation += M.T @ M
+        orientation += _commutator_normal(o_s / norm, o_t / norm)
     H += W_ORIENTATION * orientation * np.trace(H) / max(np.trace(orientation), 1e-12)
     C = np.linalg.solve(H + 1e-9 * np.trace(H) / (k * k) * np.eye(k * k), rhs).reshape((k, k), order="F")
-    mapping = _nearest_rows(phi_s @ C, phi_t)
+    mapping = _nearest_rows(phi_s @ C, phi_t, dtype=np.float32)
     mapping[pairs[:, 0]] = pairs[:, 1]
     return mapping
 

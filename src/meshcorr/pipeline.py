@@ -43,6 +43,11 @@ from .selection import MapCandidate, choose_map, score_candidates
 from .symmetry import (SYMMETRY_MODES, WIDE_CANDIDATES, Candidate, candidate_ranks, choose, metric_distortion,
                        right_map_missing)
 from .timing import StageProgress, StageTimer
+
+#: How a tip assignment becomes a dense map: "oriented" (meshcorr.oriented_start, when the
+#: orientation is reliable) or "distances" (meshcorr.landmark_map); the first is named
+#: "extremities-<rank>", others get their name appended (benchmarks/selection_study.py runs both).
+EXTREMITY_STARTS: tuple[str, ...] = ("oriented",)
 from .tps import mean_pairwise_distance
 
 #: Geodesic rows sampled on the source for the metric distortion of a candidate
@@ -289,9 +294,12 @@ def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, s
         tips = [find_extremities(mesh, spectrum.geodesics_from, length_unit=spectrum.max_geodesic,
                                  random_state=random_state) for mesh, spectrum in zip((src, tgt), spectra)]
         for rank, (energy, assignment) in enumerate(match_extremities(*tips)):
-            start = (fit_oriented_map(src, tgt, g1, g2, assignment, basis_k=refine_k, random_state=random_state)
-                     if reliable else landmark_map(g1, g2, assignment))
-            starts.append((f"extremities-{rank}", start, {"extremity_energy": energy}))
+            for how in EXTREMITY_STARTS if reliable else ("distances",):
+                start = (fit_oriented_map(src, tgt, g1, g2, assignment, basis_k=refine_k,
+                                          random_state=random_state) if how == "oriented"
+                         else landmark_map(g1, g2, assignment))
+                suffix = "" if how == EXTREMITY_STARTS[0] or not reliable else f"-{how}"
+                starts.append((f"extremities-{rank}{suffix}", start, {"extremity_energy": energy}))
     candidates = [MapCandidate("spectral", spectral_map)]
     if spectral_other is not None:  # unrefined: it is kept as the alternative, rarely chosen
         candidates.append(MapCandidate("spectral-alternative", spectral_other))

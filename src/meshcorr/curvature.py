@@ -26,7 +26,9 @@ under bending only near the joints. Clipped to its 1st-99th percentiles
 of radius :math:`r \\sqrt{A}`, weighted by vertex area (the curvature
 integrated over the ball divided by the ball's area: the same on a coarse
 and a finely subdivided mesh), at a few radii, and standardised by its mean
-and standard deviation over an area-weighted vertex sample, so that two
+and standard deviation over an area-weighted vertex sample (on an open mesh
+the boundary vertices, where the Laplacian of the coordinates is one-sided
+and no curvature, get no weight), so that two
 meshes of different resolution and size compare. Evaluating it only at a
 sample of source vertices and their images keeps the cost independent of
 the mesh size (balls hold more vertices on finer meshes; a sparse
@@ -85,9 +87,26 @@ def _curvature_field(mesh: Mesh, signed: bool = True) -> tuple[np.ndarray, np.nd
     key = ("curvature_field",) if signed else ("curvature_field", "unsigned")
     if key not in mesh._cache:
         H, mass = signed_mean_curvature(mesh)
-        H = np.clip(H if signed else np.abs(H), *np.percentile(H if signed else np.abs(H), [1.0, 99.0]))
+        # On a boundary the Laplacian of the coordinates is one-sided, not a curvature: those
+        # vertices get no weight in the ball averages (a ball of boundary vertices only keeps them).
+        mass = np.where(_on_boundary(mesh), 0.0, mass)
+        interior = mass > 0
+        H = H if signed else np.abs(H)
+        H = np.clip(H, *np.percentile(H[interior] if interior.any() else H, [1.0, 99.0]))
         mesh._cache[key] = (H, mass, cKDTree(np.asarray(mesh.vertices, dtype=float)), float(np.sqrt(mass.sum())))
     return mesh._cache[key]
+
+
+def _on_boundary(mesh: Mesh) -> np.ndarray:
+    """``(n,)`` bool: vertices on an edge that only one face uses (none on a point cloud)."""
+    faces = np.asarray(mesh.faces)
+    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
+    keys = edges[:, 0] * np.int64(mesh.n_vertices) + edges[:, 1]
+    unique, counts = np.unique(keys, return_counts=True)
+    single = unique[counts == 1]
+    boundary = np.zeros(mesh.n_vertices, dtype=bool)
+    boundary[single // mesh.n_vertices] = boundary[single % mesh.n_vertices] = True
+    return boundary
 
 
 def smoothed_curvature(mesh: Mesh, vertices: np.ndarray, radius: float, *, signed: bool = True) -> np.ndarray:
@@ -119,7 +138,10 @@ def smoothed_curvature(mesh: Mesh, vertices: np.ndarray, radius: float, *, signe
     sizes = np.fromiter((len(b) for b in balls), dtype=np.int64, count=len(balls))
     members = np.fromiter(itertools.chain.from_iterable(balls), dtype=np.int64, count=int(sizes.sum()))
     starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
-    return np.add.reduceat(mass[members] * H[members], starts) / np.add.reduceat(mass[members], starts)
+    weight = np.add.reduceat(mass[members], starts)
+    total = np.add.reduceat(mass[members] * H[members], starts)
+    # A ball of boundary vertices only (no weight): its centre's own value.
+    return np.where(weight > 0, total / np.where(weight > 0, weight, 1.0), H[vertices])
 
 
 def curvature_disagreement(source: Mesh, target: Mesh, mapping: np.ndarray, *,

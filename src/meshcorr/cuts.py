@@ -1,0 +1,196 @@
+"""Partial shapes and holes made from a whole mesh, for experiments and tests.
+
+Real scans are parts of shapes: one side of an object, a body cut by the
+scanner's field of view, a surface with holes where the sensor saw nothing.
+These functions make such inputs from a complete mesh in a reproducible way
+and return, with the new mesh, the original index of each vertex it keeps,
+so that a ground-truth map of the whole shape restricts to the part as
+``truth[kept]``.
+
+- :func:`cut_by_plane` keeps the side of a plane that holds a given fraction
+  of the area (the plane's normal is random or given).
+- :func:`remove_balls` removes geodesic balls around random centres until
+  the kept area is a given fraction.
+- :func:`punch_holes` removes a number of small geodesic discs.
+
+Faces are kept or removed by the mean of their vertices' values (height
+along the plane's normal, distance to the nearest centre), the vertices
+of no kept face are dropped, and the largest connected piece is kept (a
+cut can leave islands; the faces around a vertex where two sheets would
+touch are dropped too), so the result is a valid input to
+:func:`meshcorr.match`. Geodesic distances come from the heat method
+(:mod:`meshcorr.geodesics`, potpourri3d).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+from ._params import check_int
+from .errors import ParameterError
+from .geodesics import geodesic_solver
+from .mesh import Mesh, MeshLike, as_mesh
+from .validate import pinched_vertices
+
+
+def _face_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    v = vertices[faces]
+    return 0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
+
+
+def _faces_below(mesh: Mesh, values: np.ndarray, keep: float) -> np.ndarray:
+    """``(m,)`` bool: the faces of least mean vertex value that hold ``keep`` of the area."""
+    face_values = values[mesh.faces].mean(axis=1)
+    order = np.argsort(face_values, kind="stable")
+    cumulative = np.cumsum(_face_areas(mesh.vertices, mesh.faces)[order])
+    kept = np.zeros(len(face_values), dtype=bool)
+    kept[order[:np.searchsorted(cumulative, keep * cumulative[-1]) + 1]] = True
+    return kept
+
+
+def _keep_fraction(value, func: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < value < 1.0:
+        raise ParameterError(f"{func}: keep must be a fraction of the area strictly between 0 and 1, got {value!r}.")
+    return float(value)
+
+
+def submesh(mesh: Mesh, keep_faces: np.ndarray, *, name: str | None = None) -> tuple[Mesh, np.ndarray]:
+    """The largest connected piece of the kept faces.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    keep_faces : (m,) bool
+        Faces that may stay.
+    name : str, optional
+        Name of the new mesh; default ``"<mesh> (part)"``.
+
+    Returns
+    -------
+    part : Mesh
+    kept : (p,) int
+        Index in ``mesh`` of each vertex of ``part``.
+    """
+    faces = mesh.faces[np.asarray(keep_faces, dtype=bool)]
+    # Removing faces can leave two sheets touching at one vertex: drop the faces around it until none is left.
+    while len(pinched := pinched_vertices(faces, mesh.n_vertices)):
+        faces = faces[~np.isin(faces, pinched).any(axis=1)]
+    if len(faces) == 0:
+        raise ParameterError(f"Nothing of {mesh.name} is left to keep: keep a larger part.")
+    # Face adjacency through shared vertices: face f - vertex v incidence, squared.
+    incidence = sp.csr_matrix((np.ones(faces.size), (np.repeat(np.arange(len(faces)), 3), faces.ravel())),
+                              shape=(len(faces), mesh.n_vertices))
+    _, labels = connected_components(incidence @ incidence.T, directed=False)
+    areas = np.bincount(labels, _face_areas(mesh.vertices, faces))
+    faces = faces[labels == np.argmax(areas)]
+    kept = np.unique(faces)
+    reindex = np.full(mesh.n_vertices, -1, dtype=np.int64)
+    reindex[kept] = np.arange(len(kept))
+    part = as_mesh((mesh.vertices[kept], reindex[faces]), name=name or f"{mesh.name} (part)")
+    return part, kept
+
+
+def cut_by_plane(mesh: MeshLike, *, keep: float = 0.7, normal=None,
+                 random_state: int | None = 0) -> tuple[Mesh, np.ndarray]:
+    """The part of ``mesh`` on one side of a plane, holding ``keep`` of the area.
+
+    The plane is :math:`\\{x : x \\cdot n = t\\}`; the vertices with
+    :math:`x \\cdot n \\le t` stay, with :math:`t` the area-weighted
+    ``keep`` quantile of :math:`x \\cdot n` over the vertices.
+
+    Parameters
+    ----------
+    mesh : path, Mesh, trimesh.Trimesh or (vertices, faces)
+    keep : float
+        Fraction of the area to keep, in (0, 1). The largest piece is kept,
+        so the result can hold slightly less.
+    normal : (3,) float, optional
+        Plane normal; default a random unit vector from ``random_state``.
+    random_state : int or None
+
+    Returns
+    -------
+    part : Mesh
+    kept : (p,) int
+        Index in ``mesh`` of each vertex of ``part``.
+    """
+    mesh = as_mesh(mesh)
+    keep = _keep_fraction(keep, "cut_by_plane")
+    if normal is None:
+        normal = np.random.default_rng(random_state).normal(size=3)
+    normal = np.asarray(normal, dtype=float).reshape(-1)
+    if normal.shape != (3,) or not np.all(np.isfinite(normal)) or np.linalg.norm(normal) == 0:
+        raise ParameterError(f"cut_by_plane: normal must be a finite, non-zero 3-vector, got {normal!r}.")
+    height = mesh.vertices @ (normal / np.linalg.norm(normal))
+    return submesh(mesh, _faces_below(mesh, height, keep), name=f"{mesh.name} (cut)")
+
+
+def remove_balls(mesh: MeshLike, *, keep: float = 0.7, n_balls: int = 3,
+                 random_state: int | None = 0) -> tuple[Mesh, np.ndarray]:
+    """``mesh`` without ``n_balls`` geodesic balls around random vertices, keeping ``keep`` of the area.
+
+    The balls share one radius :math:`r`, the least for which the faces
+    with :math:`\\min_c d(x, c) \\ge r` hold ``keep`` of the area;
+    :math:`d` is the heat-method geodesic distance.
+
+    Parameters
+    ----------
+    mesh : path, Mesh, trimesh.Trimesh or (vertices, faces)
+    keep : float
+        Fraction of the area to keep, in (0, 1).
+    n_balls : int
+        Number of balls, at least 1.
+    random_state : int or None
+        Seed of the centres.
+
+    Returns
+    -------
+    part : Mesh
+    kept : (p,) int
+        Index in ``mesh`` of each vertex of ``part``.
+    """
+    mesh = as_mesh(mesh)
+    keep = _keep_fraction(keep, "remove_balls")
+    n_balls = check_int("n_balls", n_balls, minimum=1, maximum=mesh.n_vertices)
+    centres = np.random.default_rng(random_state).choice(mesh.n_vertices, n_balls, replace=False)
+    nearest = geodesic_solver(mesh.vertices, mesh.faces, "heat").distances(centres).min(axis=0)
+    return submesh(mesh, _faces_below(mesh, -nearest, keep), name=f"{mesh.name} (balls removed)")
+
+
+def punch_holes(mesh: MeshLike, *, n_holes: int = 8, hole_area: float = 0.005,
+                random_state: int | None = 0) -> tuple[Mesh, np.ndarray]:
+    """``mesh`` with ``n_holes`` small holes: geodesic discs of ``hole_area`` of the area each.
+
+    Centres are spread by geodesic farthest-point sampling (the first drawn
+    with ``random_state``), so the holes do not merge; a disc of area :math:`a A`
+    has geodesic radius :math:`r = \\sqrt{a A / \\pi}`.
+
+    Parameters
+    ----------
+    mesh : path, Mesh, trimesh.Trimesh or (vertices, faces)
+    n_holes : int
+        Number of holes, at least 1.
+    hole_area : float
+        Area of each hole as a fraction of the total, in (0, 0.1].
+    random_state : int or None
+
+    Returns
+    -------
+    holed : Mesh
+    kept : (p,) int
+        Index in ``mesh`` of each vertex of ``holed``.
+    """
+    from .landmarks import farthest_point_sampling
+
+    mesh = as_mesh(mesh)
+    n_holes = check_int("n_holes", n_holes, minimum=1, maximum=mesh.n_vertices)
+    if isinstance(hole_area, bool) or not isinstance(hole_area, (int, float)) or not 0.0 < hole_area <= 0.1:
+        raise ParameterError(f"punch_holes: hole_area must be in (0, 0.1] (a fraction of the area), got {hole_area!r}.")
+    radius = float(np.sqrt(hole_area * mesh.area / np.pi))
+    solver = geodesic_solver(mesh.vertices, mesh.faces, "heat")
+    centres = farthest_point_sampling(lambda i: solver.distances(np.array([i]))[0], mesh.n_vertices, n_holes,
+                                      random_state=random_state)
+    inside = (centres.distances.min(axis=0) < radius)[mesh.faces].mean(axis=1) > 0.5
+    return submesh(mesh, ~inside, name=f"{mesh.name} (holes)")

@@ -198,7 +198,7 @@ def test_an_open_cloud_has_an_unreliable_orientation_and_the_match_says_so():
 
 def test_normals_that_cannot_be_oriented_are_flagged():
     """Noise as large as the spacing: neighbouring normals disagree, the estimate is unreliable."""
-    points = sphere_points(2000) + 0.15 * np.random.default_rng(3).standard_normal((2000, 3))
+    points = sphere_points(2000) + 0.3 * np.random.default_rng(3).standard_normal((2000, 3))
     orientation = mesh_orientation(as_mesh(points))
     assert not orientation.reliable and "could not be oriented consistently" in orientation.reason
 

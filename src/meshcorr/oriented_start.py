@@ -31,7 +31,10 @@ coefficients in the first ``k`` Laplace-Beltrami eigenfunctions
   ``d``) commutes with a map that keeps the orientation and anti-commutes
   with one that reverses it; :math:`O^d` is written in each basis as
   :math:`O_{ab} = \\int \\phi_a \\langle n \\times \\nabla d, \\nabla \\phi_b
-  \\rangle`, with face-wise gradients on the outward-oriented mesh.
+  \\rangle`, with face-wise gradients on the outward-oriented mesh. A point
+  cloud has no faces: its operators are zero, and the fit keeps the first
+  two terms (the orientation of the candidate is then judged by its score
+  on the estimated normals, :mod:`meshcorr.selection`).
 
 The energy is quadratic in :math:`C`: its ``k^2`` normal equations are
 solved directly (``k = 20``: a 400 x 400 system). The vertex map is the
@@ -190,8 +193,10 @@ def fit_oriented_map(source: Mesh, target: Mesh, source_geodesics: RowFn, target
 
 
 def _unit_masses(mesh: Mesh) -> np.ndarray:
-    """Lumped vertex areas summing to 1 (the bases' mass matrix)."""
+    """Lumped vertex areas summing to 1 (the bases' mass matrix; a point cloud's from its Laplacian)."""
+    from .laplacian import vertex_areas
     from .orientation import vertex_normals
 
-    areas = vertex_normals(np.asarray(mesh.vertices), np.asarray(mesh.faces))[1]
+    areas = (vertex_areas(mesh) if mesh.is_cloud
+             else vertex_normals(np.asarray(mesh.vertices), np.asarray(mesh.faces))[1])
     return areas / areas.sum()

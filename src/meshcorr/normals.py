@@ -34,7 +34,7 @@ checked:
    minimum spanning tree, jumps across parts in contact and leaves whole
    regions the wrong way: measured on the vertices of TOSCA victoria21, dog3,
    horse0, cat0, michael3 and centaur0, the normals are opposite to the
-   mesh's on 1-7 % of the area (8-18 % with Hoppe's propagation); with
+   mesh's on 0.5-7 % of the area (3-18 % with Hoppe's propagation); with
    noise of 1 % of the bounding-box diagonal, 7-14 %.
 4. **Outward**: by the divergence theorem the volume enclosed by a closed
    surface is :math:`V = \\frac{1}{3} \\sum_i a_i (x_i - o) \\cdot n_i` for

@@ -32,7 +32,7 @@ import meshcorr
 import meshcorr.pipeline as pipeline
 from meshcorr.evaluation import GeodesicCache
 from meshcorr.mesh import as_mesh
-from meshcorr.selection import DISTORTION_FLOOR, DISTORTION_SLACK, ORIENTATION_MIN
+from meshcorr.selection import ORIENTATION_MIN
 from robustness import DATA, _spread, build_sets, score
 
 FIELDS = ["set", "source", "target", "origin", "chosen", "orientation", "distortion", "curvature",
@@ -84,12 +84,18 @@ def dump(per_set: int, out: Path) -> None:
                 print(f"{name} {pair.source_name}->{pair.target_name} done", file=sys.stderr, flush=True)
 
 
-def _choose(rows: list[dict], keep, power: float, slack: float = DISTORTION_SLACK,
-            floor: float = DISTORTION_FLOOR, minimum: float = ORIENTATION_MIN) -> dict:
-    """The candidate the library's rule keeps among ``rows`` that ``keep(row)`` admits."""
+def _choose(rows: list[dict], keep, power: float, slack: float | None = None,
+            minimum: float = ORIENTATION_MIN) -> dict:
+    """The candidate the library's rule keeps among ``rows`` that ``keep(row)`` admits.
+
+    ``slack``: only maps of distortion at most ``slack`` x the least one (+ 0.01) count as
+    orientation-preserving candidates (a variant; None: the library's rule).
+    """
     pool = [r for r in rows if keep(r)]
-    least = min(r["distortion"] for r in pool)
-    plausible = [r for r in pool if r["distortion"] <= slack * least + floor]
+    plausible = pool
+    if slack is not None:
+        least = min(r["distortion"] for r in pool)
+        plausible = [r for r in pool if r["distortion"] <= slack * least + 0.01]
     pool = [r for r in plausible if r["orientation"] >= minimum] or pool
     return min(pool, key=lambda r: r["distortion"] * r["curvature"] ** power)
 
@@ -112,17 +118,25 @@ def replay(out: Path) -> str:
     def distances(r):
         return not (r["origin"].startswith("extremities") and not r["origin"].endswith("-distances"))
 
+    def gated(candidates, r):  # an oriented map only where its assignment's distance map keeps the orientation
+        sibling = [q for q in candidates if q["origin"] == r["origin"] + "-distances"]
+        return not sibling or sibling[0]["orientation"] >= 0.5
+
     rules = {
-        "as run (oriented starts, distortion x curvature^3)": lambda c: [r for r in c if r["chosen"] == "1"][0],
-        "distance starts (the previous release), distortion x curvature^3": lambda c: _choose(c, distances, 3),
-        "oriented starts, distortion x curvature^3": lambda c: _choose(c, oriented, 3),
-        "oriented starts, distortion x curvature": lambda c: _choose(c, oriented, 1),
-        "oriented starts, distortion alone": lambda c: _choose(c, oriented, 0),
-        "both starts, distortion x curvature^3": lambda c: _choose(c, lambda r: True, 3),
-        "both starts, distortion x curvature": lambda c: _choose(c, lambda r: True, 1),
-        "both starts, distortion alone": lambda c: _choose(c, lambda r: True, 0),
-        "oracle (truth picks), both starts": lambda c: min(c, key=lambda r: r["mean_error"]),
+        "as run (both starts, the library's rule)": lambda c: [r for r in c if r["chosen"] == "1"][0],
     }
+    for power in (3, 1, 0):
+        energy = {3: "distortion x curvature^3", 1: "distortion x curvature", 0: "distortion alone"}[power]
+        rules[f"distance starts (default), {energy}"] = lambda c, p=power: _choose(c, distances, p)
+        rules[f"oriented starts, {energy}"] = lambda c, p=power: _choose(c, oriented, p)
+        rules[f"both starts, {energy}"] = lambda c, p=power: _choose(c, lambda r: True, p)
+        rules[f"both, oriented only where the distance map keeps orientation, {energy}"] = (
+            lambda c, p=power: _choose(c, lambda r: gated(c, r), p))
+    rules["distance starts, distortion x curvature^3, orientation only among maps <= 2x least distortion"] = (
+        lambda c: _choose(c, distances, 3, slack=2.0))
+    rules["oriented starts, distortion x curvature^3, orientation only among maps <= 2x least distortion"] = (
+        lambda c: _choose(c, oriented, 3, slack=2.0))
+    rules["oracle (truth picks), both starts"] = lambda c: min(c, key=lambda r: r["mean_error"])
     sets = sorted({k[0] for k in pairs})
     lines = ["| rule | " + " | ".join(f"{s} ({sum(k[0] == s for k in pairs)})" for s in sets) + " |",
              "|---|" + "---|" * len(sets)]

@@ -44,10 +44,12 @@ from .symmetry import (SYMMETRY_MODES, WIDE_CANDIDATES, Candidate, candidate_ran
                        right_map_missing)
 from .timing import StageProgress, StageTimer
 
-#: How a tip assignment becomes a dense map: "oriented" (meshcorr.oriented_start, when the
-#: orientation is reliable) or "distances" (meshcorr.landmark_map); the first is named
-#: "extremities-<rank>", others get their name appended (benchmarks/selection_study.py runs both).
-EXTREMITY_STARTS: tuple[str, ...] = ("oriented",)
+#: How a tip assignment becomes a dense map: "distances" (meshcorr.landmark_map) or "oriented"
+#: (meshcorr.oriented_start, when the orientation is reliable); the first is named
+#: "extremities-<rank>", others get their name appended. benchmarks/selection_study.py runs both:
+#: "oriented" alone was better on TOSCA and SHREC'07 humans and much worse on gorilla -> human
+#: (benchmarks/RESULTS-robustness-trials.md), so the default stays "distances".
+EXTREMITY_STARTS: tuple[str, ...] = ("distances",)
 from .tps import mean_pairwise_distance
 
 #: Geodesic rows sampled on the source for the metric distortion of a candidate

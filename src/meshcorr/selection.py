@@ -12,12 +12,7 @@ one that the following energies prefer:
 - **orientation** (:func:`meshcorr.orientation.orientation_score`): the
   area fraction on which the map keeps the orientation. A left/right mirror
   reverses it everywhere; maps below :data:`ORIENTATION_MIN` are set aside
-  whenever one above exists among the *plausible* maps (metric distortion
-  at most :data:`DISTORTION_SLACK` times the least plus
-  :data:`DISTORTION_FLOOR`) and the orientation can be trusted. Between a
-  shape and its mirror image no orientation-preserving map is an isometry:
-  the orientation-preserving candidates are then all far more distorted than
-  the reflection, and the reflection is kept.
+  whenever one above exists and the orientation can be trusted.
 - **metric distortion** (:func:`meshcorr.symmetry.metric_distortion`, the
   Gromov-Hausdorff-type energy of Bronstein, Bronstein & Kimmel, PNAS 2006):
   how much geodesic distances change under the map, from
@@ -66,9 +61,6 @@ from .symmetry import _rounded, metric_distortion
 
 #: Maps of orientation score below this are set aside when one above exists.
 ORIENTATION_MIN = 0.6
-#: A map is plausible when its distortion is at most DISTORTION_SLACK x the least one + DISTORTION_FLOOR.
-DISTORTION_SLACK = 2.0
-DISTORTION_FLOOR = 0.01
 #: Seeded source vertices of the metric distortion.
 N_DISTORTION_SOURCES = 24
 #: Exponent of the curvature disagreement in the energy a map is chosen by.
@@ -176,9 +168,7 @@ def choose_map(candidates: list[MapCandidate], *, reliable: bool
         best = max(c.landmarks_kept for c in pool)
         pool = [c for c in pool if c.landmarks_kept == best]
     if reliable:
-        least = min(c.distortion for c in pool)
-        plausible = [c for c in pool if c.distortion <= DISTORTION_SLACK * least + DISTORTION_FLOOR]
-        pool = [c for c in plausible if c.orientation >= ORIENTATION_MIN] or pool
+        pool = [c for c in pool if c.orientation >= ORIENTATION_MIN] or pool
     chosen = min(pool, key=lambda c: energy(c, reliable))
     rest = [c for c in candidates if c is not chosen]
     if reliable:

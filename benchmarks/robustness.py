@@ -278,13 +278,18 @@ def main(argv=None) -> int:
                           f"{row['seconds']:.1f} s", file=sys.stderr, flush=True)
     rows = [r for r in rows if r["set"] in chosen and r["method"] in args.methods]
     text = markdown(summarize(with_paired_subset(rows)))
-    header = (f"Command: `python benchmarks/robustness.py {' '.join(argv or sys.argv[1:])}`; "
+    publish(text, "robustness.py", argv, args.report)
+    return 0
+
+
+def publish(text: str, script: str, argv, report: Path | None) -> None:
+    """Print a Markdown report under a line naming the command, machine and date; also write it to ``report``."""
+    header = (f"Command: `python benchmarks/{script} {' '.join(argv or sys.argv[1:])}`; "
               f"{platform.node()}, {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
               f"{time.strftime('%Y-%m-%d')}, meshcorr {getattr(meshcorr, '__version__', '?')}.\n\n")
     print(header + text)
-    if args.report is not None:
-        args.report.write_text(header + text + "\n")
-    return 0
+    if report is not None:
+        report.write_text(header + text + "\n")
 
 
 if __name__ == "__main__":

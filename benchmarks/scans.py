@@ -42,8 +42,6 @@ from __future__ import annotations
 import argparse
 import csv
 import inspect
-import os
-import platform
 import sys
 import time
 from dataclasses import dataclass, field
@@ -57,7 +55,7 @@ from meshcorr import cuts
 from meshcorr.errors import MeshcorrError
 from meshcorr.evaluation import GeodesicCache
 from meshcorr.mesh import Mesh, as_mesh
-from robustness import DATA, Pair, _spread, markdown, score_points, summarize, tosca_pairs
+from robustness import DATA, Pair, _spread, markdown, publish, score_points, summarize, tosca_pairs
 
 CASES = ("clean", "cloud", "cloud-noisy", "partial-plane", "partial-balls", "holes")
 MESH_CASES = ("clean", "partial-plane", "partial-balls", "holes")
@@ -280,12 +278,7 @@ def main(argv=None) -> int:
     text += "\n\nAgainst the clean meshes (same pairs, same method):\n\n" + ratios(rows)
     if unsupported:
         text += "\n\nNot supported: " + "; ".join(f"{c} / {m}: {s}" for c, m, s in unsupported)
-    header = (f"Command: `python benchmarks/scans.py {' '.join(argv or sys.argv[1:])}`; "
-              f"{platform.node()}, {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-              f"{time.strftime('%Y-%m-%d')}, meshcorr {getattr(meshcorr, '__version__', '?')}.\n\n")
-    print(header + text)
-    if args.report is not None:
-        args.report.write_text(header + text + "\n")
+    publish(text, "scans.py", argv, args.report)
     return 0
 
 

@@ -33,8 +33,8 @@ from .mesh import Mesh, MeshLike
 from .methods import METHOD_NAMES, applicable_options, changed_options, reject_inapplicable, run_method
 from .modes import MODES, N_SAMPLES, SCALABLE_ABOVE, resolve_memory, select_mode
 from .orientation import mesh_orientation, orientation_score
-from .partial import (check_part_is_open, check_part_not_larger, check_partial_options, geodesic_rows,
-                      invert_part_map, match_part, part_region, partiality_suspicion)
+from .partial import (check_part_not_larger, check_partial_options, check_roles, geodesic_rows, invert_part_map,
+                      match_part, part_region, partiality_suspicion)
 from .prepared import REFINE_K, PreparedShape, as_meshes, pair_shapes, pair_spectrum, shape_settings
 from .progress import as_progress
 from .refine import prefetch_bases, refine_map
@@ -210,9 +210,6 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
                                 max_memory=max_memory, scalable_above=scalable_above, refine=refine,
                                 refine_k=refine_k, random_state=random_state)
         return _match_partial(shapes, pairs, partial, spectral_options, extremities=extremities, timer=timer)
-    suspicion = partiality_suspicion(src, tgt)
-    if suspicion:
-        warnings.warn(suspicion, PartialShapeWarning, stacklevel=2)
 
     mode = select_mode(mode, src.n_vertices, tgt.n_vertices, max_memory=max_memory,
                        scalable_above=scalable_above, bijective=bijective)
@@ -222,6 +219,9 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         # Steps 1-3: geodesic distances, Gaussian affinities, scaled spectral embedding.
         spectra = [pair_spectrum(shape, settings, mode, timer) for shape in shapes]
         X, Y = spectra[0].embedding, spectra[1].embedding
+        suspicion = partiality_suspicion(src, tgt, spectra[0].max_geodesic, spectra[1].max_geodesic)
+        if suspicion:  # a part given as a whole shape (meshcorr.partial)
+            warnings.warn(suspicion, PartialShapeWarning, stacklevel=2)
 
         # Step 4: eigenvector reordering and sign correction.
         with timer.stage("reorder"):
@@ -313,10 +313,10 @@ def _match_partial(shapes, pairs: np.ndarray | None, partial: str, spectral_opti
     geodesic, refine, refine_k = (spectral_options[key] for key in ("geodesic", "refine", "refine_k"))
     random_state = spectral_options["random_state"]
     src, tgt = as_meshes(*shapes)
-    rows = [shape_rows(shape, geodesic) for shape in shapes]
     ordered = shapes if partial == "source" else shapes[::-1]
-    (part, whole), (part_rows, whole_rows) = ((src, tgt), rows) if partial == "source" else ((tgt, src), rows[::-1])
-    check_part_is_open(part, role=partial)
+    part, whole = as_meshes(*ordered)
+    part_rows, whole_rows = geodesic_rows(part, geodesic), geodesic_rows(whole, geodesic)
+    check_roles(part, whole, part_rows, whole_rows, role=partial)
     if pairs is not None and partial == "target":
         pairs = pairs[:, ::-1].copy()
     with timer.stage("spectral"), warnings.catch_warnings():
@@ -355,14 +355,6 @@ def _match_partial(shapes, pairs: np.ndarray | None, partial: str, spectral_opti
         timings=timer.timings, params=params, alternative_map=full_maps[1], orientation_reliable=found.reliable,
         refine_history=found.history, map_candidates=found.candidates, partial=partial, matched_region=region,
         matched_area_fraction=found.area_fraction)
-
-
-def shape_rows(shape: Mesh | PreparedShape, geodesic: str):
-    """Geodesic rows of a shape in its own units: a prepared shape's, or solved on demand."""
-    if isinstance(shape, PreparedShape):
-        spectrum = shape.spectrum
-        return lambda i: spectrum.geodesics_from(i) * spectrum.max_geodesic
-    return geodesic_rows(shape, geodesic)
 
 
 def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, spectral_other,

@@ -153,18 +153,23 @@ def truth_landmarks(pair: Pair, source, count: int = N_TRUTH_LANDMARKS) -> np.nd
     return np.stack([pair.source_points[chosen], pair.target_points[chosen]], axis=1)
 
 
-def score(pair: Pair, target, mapping: np.ndarray, cache: GeodesicCache) -> dict:
-    """Flips-counted and forgiven errors of one map at the pair's truth points."""
-    predicted = mapping[pair.source_points]
-    errors = geodesic_errors(target, predicted, pair.target_points, cache=cache)
+def score_points(target, predicted: np.ndarray, truth: np.ndarray, sym: np.ndarray | None,
+                 cache: GeodesicCache) -> dict:
+    """Flips-counted and forgiven errors of predicted target vertices against the truth (and its mirror)."""
+    errors = geodesic_errors(target, predicted, truth, cache=cache)
     row = {"mean_error": float(errors.mean()), "n_points": len(errors)}
-    if pair.target_sym_points is None:
+    if sym is None:
         return {**row, "forgiven_error": row["mean_error"], "flipped": 0, "partial": 0}
-    sym = geodesic_errors(target, predicted, pair.target_sym_points, cache=cache)
-    forgiven = float(np.minimum(errors, sym).mean())
-    flipped = sym.mean() < errors.mean()
+    sym_errors = geodesic_errors(target, predicted, sym, cache=cache)
+    forgiven = float(np.minimum(errors, sym_errors).mean())
+    flipped = sym_errors.mean() < errors.mean()
     partial = (not flipped) and row["mean_error"] > 2 * forgiven and row["mean_error"] > 0.05
     return {**row, "forgiven_error": forgiven, "flipped": int(flipped), "partial": int(partial)}
+
+
+def score(pair: Pair, target, mapping: np.ndarray, cache: GeodesicCache) -> dict:
+    """Flips-counted and forgiven errors of one map at the pair's truth points."""
+    return score_points(target, mapping[pair.source_points], pair.target_points, pair.target_sym_points, cache)
 
 
 def run_pair(pair: Pair, methods: list[str]) -> list[dict]:

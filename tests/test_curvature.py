@@ -79,3 +79,17 @@ def test_bad_maps_are_refused():
         curvature_disagreement(mesh, mesh, np.arange(len(V) - 1))
     with pytest.raises(ParameterError, match="one target vertex"):
         curvature_disagreement(mesh, mesh, np.full(len(V), len(V)))
+
+
+def test_a_boundary_does_not_bend_the_curvature_next_to_it():
+    # A sphere with its top cut off: the one-sided Laplacian on the rim is not a curvature.
+    from meshcorr import cuts
+    from meshcorr.curvature import _on_boundary
+    from meshcorr.mesh import as_mesh
+
+    ball = as_mesh(ds.sphere(subdivisions=4))
+    part, _ = cuts.cut_by_plane(ball, keep=0.8, normal=[0, 0, 1])
+    rim = np.flatnonzero(_on_boundary(part))
+    assert len(rim) > 50
+    interior = smoothed_curvature(part, np.flatnonzero(part.vertices[:, 2] < -0.5), 0.045)
+    np.testing.assert_allclose(smoothed_curvature(part, rim, 0.045), np.median(interior), rtol=0.02)

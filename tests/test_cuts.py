@@ -7,6 +7,7 @@ import trimesh
 from meshcorr import cuts, datasets
 from meshcorr.errors import ParameterError
 from meshcorr.mesh import as_mesh
+from meshcorr.validate import pinched_vertices
 
 
 @pytest.fixture(scope="module")
@@ -69,19 +70,17 @@ def test_bad_parameters_are_refused_by_name(ball, call, message):
         call(ball)
 
 
-def test_a_pinch_left_by_a_cut_is_taken_apart():
-    # A 3 x 3 grid of squares; keep two squares and a third one that touches the pair at a corner only.
-    xs, ys = np.meshgrid(np.arange(4.0), np.arange(4.0), indexing="ij")
-    vertices = np.column_stack([xs.ravel(), ys.ravel(), np.zeros(16)])
-    index = lambda i, j: 4 * i + j  # noqa: E731
-    faces = np.array([f for i in range(3) for j in range(3)
-                      for f in ([index(i, j), index(i + 1, j), index(i + 1, j + 1)],
-                                [index(i, j), index(i + 1, j + 1), index(i, j + 1)])])
-    grid = as_mesh((vertices, faces), name="grid")
-    square = lambda i, j: [2 * (3 * i + j), 2 * (3 * i + j) + 1]  # noqa: E731
-    keep = np.zeros(len(faces), dtype=bool)
-    keep[square(0, 0) + square(0, 1) + square(1, 2)] = True  # (1, 2) touches (0, 1) at vertex (1, 2)
-    part, kept = cuts.submesh(grid, keep)  # validate_mesh refuses a pinch: this must not raise
-    np.testing.assert_array_equal(np.sort(kept), [index(0, 0), index(0, 1), index(0, 2), index(1, 0),
-                                                  index(1, 1), index(1, 2)])
-    assert len(part.faces) == 4
+def test_a_cut_that_would_pinch_a_vertex_drops_the_faces_around_it(ball):
+    # Remove two opposite faces of one vertex's fan: the rest of the fan is two sheets touching at the vertex.
+    vertex = 0
+    fan = np.flatnonzero((ball.faces == vertex).any(axis=1))
+    # The fan's faces are not in cyclic order; find two that share no edge.
+    first = ball.faces[fan[0]]
+    opposite = [f for f in fan[1:] if len(np.intersect1d(ball.faces[f], first)) == 1][0]
+    keep = np.ones(len(ball.faces), dtype=bool)
+    keep[[fan[0], opposite]] = False
+    assert list(pinched_vertices(ball.faces[keep], ball.n_vertices)) == [vertex]
+    part, kept = cuts.submesh(ball, keep)
+    assert vertex not in kept
+    assert len(pinched_vertices(part.faces, part.n_vertices)) == 0
+    assert part.n_vertices == ball.n_vertices - 1

@@ -167,11 +167,11 @@ def test_directory_is_not_a_file(tmp_path):
         read_mesh(tmp_path)
 
 
-@pytest.mark.parametrize("name", ["mesh.xyz", "mesh"])
+@pytest.mark.parametrize("name", ["mesh.pts", "mesh"])
 def test_unsupported_extension(tmp_path, name):
     path = tmp_path / name
     path.write_text("0 0 0\n")
-    with pytest.raises(MeshError, match=r"Unsupported mesh format .*supported: \.off, \.obj, \.ply, \.stl"):
+    with pytest.raises(MeshError, match=r"Unsupported mesh format .*supported: \.off, \.obj, \.ply, \.stl, \.xyz, \.npy"):
         read_mesh(path)
 
 
@@ -267,18 +267,34 @@ def test_ply_with_fewer_faces_than_declared_is_refused(tmp_path):
         read_mesh(path)
 
 
-@pytest.mark.parametrize("name, content", [
-    ("none.off", "OFF\n4 0 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"),
-    ("none.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"),
+@pytest.mark.parametrize("name, content, n_points", [
+    ("none.off", "OFF\n4 0 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n", 4),
+    ("none.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n", 3),
     ("none.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                 "property float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n"),
-    ("empty-scene.obj", "# nothing but comments\no empty\n"),
+                 "property float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n", 3),
 ])
-def test_no_triangle_faces(tmp_path, name, content):
-    """A zero-face mesh and an empty scene are refused as meshes without faces (issue 17)."""
+def test_a_file_without_faces_is_a_point_cloud(tmp_path, name, content, n_points):
+    """A zero-face mesh file is read as a point cloud, faces (0, 3) (issue 15; refused before it)."""
     path = tmp_path / name
     path.write_text(content)
-    with pytest.raises(MeshError, match="contains no triangle faces"):
+    vertices, faces = read_mesh(path)
+    assert vertices.shape == (n_points, 3) and faces.shape == (0, 3)
+    np.testing.assert_array_equal(vertices[1], [1.0, 0.0, 0.0])
+
+
+def test_an_empty_scene_is_refused(tmp_path):
+    path = tmp_path / "empty-scene.obj"
+    path.write_text("# nothing but comments\no empty\n")
+    with pytest.raises(MeshError, match="contains no vertices"):
+        read_mesh(path)
+
+
+def test_a_ply_of_points_declaring_faces_it_lacks_is_refused(tmp_path):
+    path = tmp_path / "cut.ply"
+    path.write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                    "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                    "0 0 0\n1 0 0\n0 1 0\n")
+    with pytest.raises(MeshError, match="declares 1 faces but 0 were read"):
         read_mesh(path)
 
 
@@ -297,10 +313,32 @@ def test_empty_file(tmp_path, name):
         read_mesh(path)
 
 
-def test_point_cloud_has_no_faces(tmp_path):
-    path = tmp_path / "points.obj"
-    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\n")
-    with pytest.raises(MeshError, match="contains no triangle faces"):
+def test_xyz_text_of_points(tmp_path):
+    """x y z a line, commas or spaces, extra columns and # comments ignored; a short line is refused."""
+    path = tmp_path / "points.xyz"
+    path.write_text("# scan\n0 0 0 9 9 9\n1,0,0\n\n0 1 0.5  # a comment\n")
+    vertices, faces = read_mesh(path)
+    np.testing.assert_array_equal(vertices, [[0, 0, 0], [1, 0, 0], [0, 1, 0.5]])
+    assert faces.shape == (0, 3)
+    path.write_text("0 0 0\n1 x 0\n")
+    with pytest.raises(MeshError, match="points.xyz, line 2: expected 'x y z'"):
+        read_mesh(path)
+    path.write_text("# only a comment\n")
+    with pytest.raises(MeshError, match="holds no points"):
+        read_mesh(path)
+
+
+def test_npy_of_points(tmp_path):
+    path = tmp_path / "points.npy"
+    np.save(path, np.eye(3))
+    vertices, faces = read_mesh(path)
+    np.testing.assert_array_equal(vertices, np.eye(3))
+    assert faces.shape == (0, 3)
+    np.save(path, np.arange(8))
+    with pytest.raises(MeshError, match="an \\(n, 3\\) array of real numbers; got shape \\(8,\\)"):
+        read_mesh(path)
+    path.write_bytes(b"not numpy")
+    with pytest.raises(MeshError, match="could not be read as a .npy array"):
         read_mesh(path)
 
 

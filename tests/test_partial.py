@@ -256,3 +256,10 @@ def test_a_part_whose_area_at_the_fitted_scale_exceeds_the_whole_is_refused(pair
     check_part_not_larger(part, target, 1.0, role="source")  # 0.7 of the area at the same scale: fine
     with pytest.raises(PartialityError, match=r"the source is larger: 1\.\d\d times the target's area"):
         check_part_not_larger(part, target, 1.5, role="source")  # 0.7 x 1.5^2 = 1.6
+
+
+def test_a_point_cloud_is_refused_in_the_partial_mode(pair, plane_part):
+    source, target, truth, back = pair
+    part, kept, _ = plane_part
+    with pytest.raises(PartialityError, match="needs triangle meshes: .* is a point cloud"):
+        meshcorr.match(part.vertices, target, partial="source")

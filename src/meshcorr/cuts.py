@@ -15,11 +15,10 @@ so that a ground-truth map of the whole shape restricts to the part as
 
 Faces are kept or removed by the mean of their vertices' values (height
 along the plane's normal, distance to the nearest centre), the vertices
-of no kept face are dropped, faces are taken away at vertices where two sheets
-would touch at a single point (a cut through a thin part can leave such a
-pinch, which :func:`meshcorr.validate.validate_mesh` refuses), and the largest
-connected piece is kept (a cut can leave islands), so the result is a valid
-input to :func:`meshcorr.match`. Geodesic distances come from the heat method
+of no kept face are dropped, and the largest connected piece is kept (a
+cut can leave islands; the faces around a vertex where two sheets would
+touch are dropped too), so the result is a valid input to
+:func:`meshcorr.match`. Geodesic distances come from the heat method
 (:mod:`meshcorr.geodesics`, potpourri3d).
 """
 
@@ -33,6 +32,7 @@ from ._params import check_int
 from .errors import ParameterError
 from .geodesics import geodesic_solver
 from .mesh import Mesh, MeshLike, as_mesh
+from .validate import pinched_vertices
 
 
 def _face_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -73,7 +73,10 @@ def submesh(mesh: Mesh, keep_faces: np.ndarray, *, name: str | None = None) -> t
     kept : (p,) int
         Index in ``mesh`` of each vertex of ``part``.
     """
-    faces = _without_pinches(mesh.faces[np.asarray(keep_faces, dtype=bool)], mesh.n_vertices)
+    faces = mesh.faces[np.asarray(keep_faces, dtype=bool)]
+    # Removing faces can leave two sheets touching at one vertex: drop the faces around it until none is left.
+    while len(pinched := pinched_vertices(faces, mesh.n_vertices)):
+        faces = faces[~np.isin(faces, pinched).any(axis=1)]
     if len(faces) == 0:
         raise ParameterError(f"Nothing of {mesh.name} is left to keep: keep a larger part.")
     # Face adjacency through shared vertices: face f - vertex v incidence, squared.
@@ -87,43 +90,6 @@ def submesh(mesh: Mesh, keep_faces: np.ndarray, *, name: str | None = None) -> t
     reindex[kept] = np.arange(len(kept))
     part = as_mesh((mesh.vertices[kept], reindex[faces]), name=name or f"{mesh.name} (part)")
     return part, kept
-
-
-def _without_pinches(faces: np.ndarray, n_vertices: int) -> np.ndarray:
-    """``faces`` without the smaller fans at each vertex where several fans meet (a pinch).
-
-    The corners of a vertex in two faces that share an edge through it are in
-    one fan (as :func:`meshcorr.validate.validate_mesh` tests); at a vertex of
-    several fans only the fan of most corners keeps its faces. Removing faces
-    can pinch another vertex, so this repeats until no pinch is left.
-    """
-    from .validate import _edges
-
-    while True:  # each pass removes faces, so it ends
-        if len(faces) == 0:
-            return faces
-        edges, corners = _edges(faces)
-        keys = edges[:, 0] * np.int64(n_vertices) + edges[:, 1]
-        order = np.argsort(keys, kind="stable")
-        keys, corners = keys[order], corners[order]
-        pair = np.flatnonzero(keys[1:] == keys[:-1])  # an edge in two faces: its corners link up
-        links = np.concatenate([corners[pair], corners[pair + 1]], axis=1)  # (k, 4)
-        n_corners = 3 * len(faces)
-        graph = sp.coo_matrix((np.ones(2 * len(links)), (np.r_[links[:, 0], links[:, 1]],
-                                                          np.r_[links[:, 2], links[:, 3]])),
-                              shape=(n_corners, n_corners))
-        n_fans, fan = connected_components(graph, directed=False)
-        fan_size = np.bincount(fan, minlength=n_fans)
-        fan_vertex = np.empty(n_fans, dtype=np.int64)
-        fan_vertex[fan] = faces.ravel()
-        # The largest fan of each vertex (ties: the first).
-        best = np.full(n_vertices, -1, dtype=np.int64)
-        by_size = np.lexsort((-np.arange(n_fans), fan_size))  # ascending size: larger ones overwrite
-        best[fan_vertex[by_size]] = by_size
-        losing = best[faces.ravel()] != fan
-        if not losing.any():
-            return faces
-        faces = faces[~losing.reshape(-1, 3).any(axis=1)]
 
 
 def cut_by_plane(mesh: MeshLike, *, keep: float = 0.7, normal=None,

@@ -410,8 +410,8 @@ def map_quality(source: MeshLike, target: MeshLike, mapping: np.ndarray) -> dict
     ParameterError
         If the map does not fit the meshes.
     """
-    import potpourri3d as pp3d
-
+    from .laplacian import vertex_areas
+    from .pointcloud import edges as graph_edges
     from .transfer import check_map
 
     src = source if isinstance(source, Mesh) else as_mesh(source, name="source")
@@ -420,11 +420,9 @@ def map_quality(source: MeshLike, target: MeshLike, mapping: np.ndarray) -> dict
     mapped = mapping >= 0
     if not mapped.any():
         raise ParameterError("The map sends no source vertex anywhere; there is nothing to measure.")
-    areas = pp3d.vertex_areas(np.asarray(tgt.vertices), np.asarray(tgt.faces))
+    areas = vertex_areas(tgt)
     reached = np.unique(mapping[mapped])
-    faces = np.asarray(src.faces)
-    edges = np.unique(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1),
-                      axis=0)
+    edges = graph_edges(src.vertices, src.faces)  # a cloud's: its neighbour graph (meshcorr.pointcloud)
     edges = edges[mapped[edges].all(axis=1)]
     length = np.linalg.norm(src.vertices[edges[:, 0]] - src.vertices[edges[:, 1]], axis=1) / np.sqrt(src.area)
     image = mapping[edges]

@@ -47,6 +47,7 @@ import scipy.sparse as sp
 
 from .landmarks import farthest_point_sampling
 from .mesh import Mesh
+from .pointcloud import edges
 
 RowFn = Callable[[int], np.ndarray]
 
@@ -78,10 +79,9 @@ class Extremities:
 
 
 def _one_ring(mesh: Mesh) -> sp.csr_matrix:
-    f = mesh.faces
-    rows = np.concatenate([f[:, 0], f[:, 1], f[:, 2]])
-    cols = np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
-    adjacency = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(mesh.n_vertices,) * 2).tocsr()
+    """Adjacency of the mesh's edges (of a point cloud: its neighbour graph, :func:`meshcorr.pointcloud.edges`)."""
+    pairs = edges(mesh.vertices, mesh.faces)
+    adjacency = sp.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(mesh.n_vertices,) * 2)
     return ((adjacency + adjacency.T) > 0).astype(np.float64).tocsr()
 
 

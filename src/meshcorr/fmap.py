@@ -65,12 +65,13 @@ def laplace_beltrami(mesh: Mesh, k: int, *, random_state: int | None = 0
         :math:`\\Phi^\\top M \\Phi = I` for the mass below; signs by
         :func:`meshcorr.embedding.sign_convention` (:func:`meshcorr.refine.laplace_basis`).
     mass : (n,) float
-        Lumped (barycentric) vertex areas divided by the total area: they sum to 1.
+        Lumped (barycentric) vertex areas divided by the total area: they sum to 1
+        (:func:`meshcorr.laplacian.vertex_areas`, also for point clouds).
     """
-    import potpourri3d as pp3d
+    from .laplacian import vertex_areas
 
     values, basis = laplace_basis(mesh, k, random_state=random_state)
-    mass = pp3d.vertex_areas(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+    mass = vertex_areas(mesh)  # of a point cloud: its Laplacian's (meshcorr.laplacian)
     return values, basis, mass / mass.sum()
 
 

@@ -1,9 +1,11 @@
-"""Read and write meshes and vertex maps.
+"""Read and write meshes, point clouds and vertex maps.
 
 Meshes are read without processing, so vertex ``i`` of the file is vertex
 ``i`` of the arrays (correspondences are reported by vertex index): OFF by
 :mod:`meshcorr.off`, which checks every record against the header, the other
-formats by trimesh after the checks of :func:`read_mesh`. Every file is
+formats by trimesh after the checks of :func:`read_mesh`. A file without
+faces is a point cloud (faces ``(0, 3)``), and so are the point formats
+``.xyz`` (text, ``x y z`` per line) and ``.npy`` (an ``(n, 3)`` array). Every file is
 written atomically: to a temporary file in the same directory, then moved
 over the target with :func:`os.replace`; :func:`check_outputs` refuses
 output paths that cannot be written (or are inputs) before any work, and
@@ -39,6 +41,10 @@ __all__ = ["SUPPORTED_FORMATS", "atomic_write", "check_outputs", "read_map", "re
 #: File extensions read_mesh and write_mesh understand, and their format names.
 SUPPORTED_FORMATS = {".off": "OFF", ".obj": "OBJ", ".ply": "PLY", ".stl": "STL"}
 _SUPPORTED_LIST = ", ".join(SUPPORTED_FORMATS)
+#: Point-cloud formats read_mesh reads as well (clouds are also read from the mesh formats without faces).
+POINT_FORMATS = {".xyz": "XYZ", ".npy": "NPY"}
+_READ_LIST = ", ".join({**SUPPORTED_FORMATS, **POINT_FORMATS})
+_NO_FACES = np.zeros((0, 3), dtype=np.int64)
 
 
 def _int_or_none(text) -> int | None:
@@ -146,8 +152,54 @@ def _check_binary_formats(data: bytes, label: str, fmt: str) -> bytes:
     return _text(data, label, fmt)
 
 
+def _read_xyz(data: bytes, label: str) -> np.ndarray:
+    """The points of an XYZ text file: ``x y z`` per line, further columns ignored, ``#`` comments.
+
+    Raises
+    ------
+    MeshError
+        Naming the first line with fewer than three numbers (or a value that is no number).
+    """
+    text = _text(data, label, "XYZ").decode("utf-8")
+    rows = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        fields = line.split("#", 1)[0].replace(",", " ").split()
+        if not fields:
+            continue
+        try:
+            if len(fields) < 3:
+                raise ValueError
+            rows.append((float(fields[0]), float(fields[1]), float(fields[2])))
+        except ValueError:
+            raise MeshError(f"{label}, line {number}: expected 'x y z' (three numbers, further columns "
+                            f"ignored), got {line.strip()[:60]!r}. Repair the line or re-export the points.") from None
+    if not rows:
+        raise MeshError(f"{label}: the file holds no points (only comments or blank lines).")
+    return np.array(rows, dtype=np.float64)
+
+
+def _read_npy(path: Path, label: str) -> np.ndarray:
+    """The points of an ``.npy`` file holding one ``(n, 3)`` array of real numbers."""
+    try:
+        points = np.load(path, allow_pickle=False)
+    except Exception as exc:  # numpy raises several types on a file that is no .npy array
+        raise MeshError(f"{label}: could not be read as a .npy array ({exc}). Save the points with "
+                        "numpy.save(path, points).") from exc
+    if points.ndim != 2 or points.shape[1] != 3 or not np.issubdtype(points.dtype, np.number) \
+            or np.iscomplexobj(points):
+        raise MeshError(f"{label}: a point cloud in .npy must be an (n, 3) array of real numbers; got shape "
+                        f"{points.shape} and dtype {points.dtype}. Save the x, y, z columns only.")
+    return np.array(points, dtype=np.float64)
+
+
 def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Read a triangle mesh from an OFF, OBJ, PLY or STL file, keeping vertex order.
+    """Read a triangle mesh or a point cloud, keeping vertex order.
+
+    Meshes: OFF, OBJ, PLY or STL. Point clouds: any of those without faces
+    (a PLY of points, an OBJ of ``v`` lines, an OFF with 0 faces), ``.xyz``
+    text (one point ``x y z`` a line, separated by spaces, tabs or commas;
+    further columns such as normals or colours are ignored; blank lines and
+    ``#`` comments are skipped) or ``.npy`` (one ``(n, 3)`` array).
 
     Vertices are neither merged nor reordered (OFF by :func:`meshcorr.off.parse_off`;
     the other formats by trimesh with ``process=False``, for OBJ also
@@ -178,13 +230,14 @@ def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]
         Vertex coordinates in file order.
     faces : (m, 3) int64
         Triangles as 0-based vertex indices (not validated; see
-        :func:`meshcorr.validate.validate_mesh`).
+        :func:`meshcorr.validate.validate_mesh`); ``(0, 3)`` for a point
+        cloud (see :func:`meshcorr.pointcloud.validate_cloud`).
 
     Raises
     ------
     MeshError
         If the file is missing, empty, of an unsupported format, truncated,
-        cannot be parsed, holds several separate geometries or no faces.
+        cannot be parsed, holds several separate geometries or no vertices.
 
     Warns
     -----
@@ -199,26 +252,31 @@ def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]
         which = f" ({name})" if name and name != str(path) else ""
         raise MeshError(f"No such file: {path}{which}. Check the path." if not path.exists()
                         else f"Not a file: {path}{which}; give a mesh file.")
-    fmt = SUPPORTED_FORMATS.get(path.suffix.lower())
+    fmt = {**SUPPORTED_FORMATS, **POINT_FORMATS}.get(path.suffix.lower())
     if fmt is None:
         raise MeshError(
             f"Unsupported mesh format '{path.suffix or '(no extension)'}' for {path}; "
-            f"supported: {_SUPPORTED_LIST}. Convert the file first (e.g. in MeshLab)."
+            f"supported: {_READ_LIST}. Convert the file first (e.g. in MeshLab)."
         )
+    if fmt == "NPY":
+        return _read_npy(path, label), _NO_FACES.copy()
     try:
         data = path.read_bytes()
     except OSError as exc:
         raise MeshError(f"{label}: cannot be read ({exc.strerror}). Check its permissions.") from exc
     if not data or data.isspace():
         raise MeshError(f"File is empty: {path}. Check that it was written completely.")
+    if fmt == "XYZ":
+        return _read_xyz(data, label), _NO_FACES.copy()
     if fmt == "OFF":
         plain = _read_plain_off(data)
         if plain is not None:
             return plain
         vertices, faces, n_polygons, n_records = parse_off(data, label)
-        if not len(faces):
-            raise MeshError(f"{label}: the file contains no triangle faces (a point cloud?). "
-                            "meshcorr needs a triangle mesh.")
+        if not len(vertices):
+            raise MeshError(f"{label}: the file contains no vertices. Check that it was written completely.")
+        if not len(faces):  # a point cloud
+            return vertices, _NO_FACES.copy()
         if n_polygons:
             _warn_polygons(label, f"{n_polygons} polygonal faces", n_records, len(faces))
         return vertices, faces
@@ -245,16 +303,18 @@ def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]
             f"{label} holds {len(geometries)} separate geometries (objects or materials); "
             "meshcorr needs a single mesh. Merge them into one object first."
         )
-    if not geometries or not isinstance(geometries[0], trimesh.Trimesh) or not len(geometries[0].faces):
+    if not geometries or not isinstance(geometries[0], (trimesh.Trimesh, trimesh.PointCloud)) \
+            or not len(geometries[0].vertices):
         raise MeshError(
-            f"{label}: the file contains no triangle faces (it is empty, a point cloud, "
-            f"or not a valid {fmt} file). meshcorr needs a triangle mesh."
+            f"{label}: the file contains no vertices (it is empty, or not a valid {fmt} file). "
+            "meshcorr needs a triangle mesh or a point cloud."
         )
     mesh = geometries[0]
+    cloud = isinstance(mesh, trimesh.PointCloud) or not len(mesh.faces)  # a point cloud: no faces
     if fmt == "STL":
         mesh.merge_vertices()
     vertices = np.array(mesh.vertices, dtype=np.float64)
-    faces = np.array(mesh.faces, dtype=np.int64)
+    faces = _NO_FACES.copy() if cloud else np.array(mesh.faces, dtype=np.int64)
     if vertices.ndim != 2 or vertices.shape[1] != 3 or faces.ndim != 2 or faces.shape[1] != 3:
         raise MeshError(f"{label}: the file could not be parsed as a 3-D triangle mesh (vertices of shape "
                         f"{vertices.shape}, faces of shape {faces.shape}; a vertex line with two coordinates?). "
@@ -536,9 +596,10 @@ def write_mesh(path, vertices, faces, vertex_colors=None) -> None:
     Parameters
     ----------
     path : str or os.PathLike
-        Target file ending in .off, .obj, .ply or .stl.
+        Target file ending in .off, .obj, .ply or .stl (.ply for a point cloud).
     vertices : (n, 3) float
     faces : (m, 3) int
+        ``m = 0``: a point cloud, written as a PLY of points.
     vertex_colors : (n, 3) or (n, 4) uint8, optional
         RGB(A) color per vertex.
     """
@@ -548,6 +609,13 @@ def write_mesh(path, vertices, faces, vertex_colors=None) -> None:
             f"Cannot write {path}: unsupported extension '{Path(path).suffix}'; "
             f"use one of {_SUPPORTED_LIST}."
         )
+    if np.asarray(faces).size == 0:  # a point cloud: a PLY of points (with colours)
+        if fmt != "PLY":
+            raise ParameterError(f"Cannot write {path}: a point cloud (no faces) is written as .ply.")
+        cloud = trimesh.PointCloud(np.asarray(vertices, dtype=np.float64), colors=vertex_colors)
+        payload = cloud.export(file_type="ply")
+        atomic_write(path, lambda file: file.write(payload))
+        return
     mesh = trimesh.Trimesh(
         vertices=np.asarray(vertices, dtype=np.float64),
         faces=np.asarray(faces, dtype=np.int64),

@@ -1,8 +1,10 @@
-"""A thin, immutable triangle-mesh object and the conversion of user input into it.
+"""A thin, immutable triangle-mesh (or point-cloud) object and the conversion of user input into it.
 
 Geometry lives in free functions on ``(V, F)`` arrays (:mod:`meshcorr.geodesics`,
 :mod:`meshcorr.validate`); :class:`Mesh` only holds validated, read-only
 arrays and caches derived data keyed on the parameters that produced it.
+A point cloud is a :class:`Mesh` with no faces (:attr:`Mesh.is_cloud`;
+:mod:`meshcorr.pointcloud` says what changes for it).
 """
 
 from __future__ import annotations
@@ -14,16 +16,18 @@ import numpy as np
 
 from .errors import MeshError
 from .geodesics import ProgressFn, pairwise_geodesics
+from .pointcloud import validate_cloud
 from .validate import validate_mesh
 
 
 class Mesh:
-    """A validated triangle mesh.
+    """A validated triangle mesh, or a point cloud (no faces).
 
     Parameters
     ----------
     vertices : (n, 3) float
     faces : (m, 3) int
+        ``m = 0`` for a point cloud.
     name : str
         Used in messages.
     kept : (n,) int, optional
@@ -40,6 +44,8 @@ class Mesh:
                  kept: np.ndarray | None = None, n_original: int | None = None) -> None:
         self.vertices = np.array(vertices, dtype=np.float64)
         self.faces = np.array(faces, dtype=np.int64)
+        if self.faces.size == 0:  # a point cloud
+            self.faces = self.faces.reshape(0, 3)
         self.kept = np.arange(len(self.vertices)) if kept is None else np.asarray(kept, dtype=np.int64)
         self.n_original = len(self.vertices) if n_original is None else int(n_original)
         for array in (self.vertices, self.faces, self.kept):
@@ -52,8 +58,18 @@ class Mesh:
         return len(self.vertices)
 
     @property
+    def is_cloud(self) -> bool:
+        """Whether this is a point cloud (no faces)."""
+        return len(self.faces) == 0
+
+    @property
     def area(self) -> float:
-        """Total surface area."""
+        """Total surface area: of the triangles, or of a point cloud its vertex areas' sum
+        (:func:`meshcorr.laplacian.vertex_areas`)."""
+        if self.is_cloud:
+            from .laplacian import vertex_areas
+
+            return float(vertex_areas(self).sum())
         v = self.vertices[self.faces]
         return float(0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1).sum())
 
@@ -67,6 +83,8 @@ class Mesh:
         return self._cache[key]
 
     def __repr__(self) -> str:
+        if self.is_cloud:
+            return f"Mesh(name={self.name!r}, n_vertices={self.n_vertices}, point cloud)"
         return f"Mesh(name={self.name!r}, n_vertices={self.n_vertices}, n_faces={len(self.faces)})"
 
 
@@ -75,21 +93,29 @@ MeshLike = Union[str, os.PathLike, Mesh, tuple, Any]
 
 def as_mesh(obj: MeshLike, *, name: str | None = None, largest_component: bool = False,
             min_vertices: int = 3, reason: str = "") -> Mesh:
-    """Turn a path, a trimesh object, a ``(V, F)`` pair or a :class:`Mesh` into a validated Mesh.
+    """Turn user input into a validated Mesh (a triangle mesh or a point cloud).
 
     Parameters
     ----------
-    obj : str, PathLike, Mesh, trimesh.Trimesh or (vertices, faces)
+    obj : str, PathLike, Mesh, trimesh.Trimesh, trimesh.PointCloud, (vertices, faces) or (n, 3) array
+        A file (a mesh; a point cloud: a mesh file without faces, PLY of
+        points, ``.xyz`` or ``.npy``, see :func:`meshcorr.io.read_mesh`), a
+        trimesh object, a pair of arrays (``faces`` empty for a cloud) or
+        the points of a cloud.
     name : str, optional
         Name used in messages; defaults to the file name.
     largest_component : bool
-        Keep only the largest connected component instead of raising.
+        Keep only the largest connected component (of a cloud: the largest
+        cluster of its neighbour graph) instead of raising.
     min_vertices : int
         Fewer vertices raise :class:`MeshError` (``reason`` says why).
 
     Returns
     -------
     mesh : Mesh
+        ``mesh.is_cloud`` for a point cloud, validated by
+        :func:`meshcorr.pointcloud.validate_cloud` (meshes by
+        :func:`meshcorr.validate.validate_mesh`).
     """
     if isinstance(obj, Mesh):
         if obj.n_vertices < min_vertices:
@@ -102,15 +128,31 @@ def as_mesh(obj: MeshLike, *, name: str | None = None, largest_component: bool =
         vertices, faces = read_mesh(obj, name=name)
     elif hasattr(obj, "vertices") and hasattr(obj, "faces"):
         vertices, faces = np.asarray(obj.vertices), np.asarray(obj.faces)
+    elif hasattr(obj, "vertices") and type(obj).__name__ == "PointCloud":  # trimesh.PointCloud
+        vertices, faces = np.asarray(obj.vertices), np.zeros((0, 3), dtype=np.int64)
+    elif isinstance(obj, np.ndarray) and obj.ndim == 2:
+        vertices, faces = obj, np.zeros((0, 3), dtype=np.int64)
     elif isinstance(obj, (tuple, list)) and len(obj) == 2:
         vertices, faces = obj  # validate_mesh converts them (a ragged list raises MeshError)
     else:
         raise MeshError(
-            f"Cannot make a mesh out of {type(obj).__name__}: give a file path, a trimesh.Trimesh, "
-            "a meshcorr.Mesh or a (vertices, faces) pair."
+            f"Cannot make a mesh out of {type(obj).__name__}: give a file path, a trimesh.Trimesh or "
+            "trimesh.PointCloud, a meshcorr.Mesh, a (vertices, faces) pair or an (n, 3) array of points."
         )
     name = name or "mesh"
     n_original = len(vertices)
+    if _no_faces(faces):
+        points, kept = validate_cloud(vertices, min_vertices=min_vertices, largest_component=largest_component,
+                                      name=name, reason=reason)
+        return Mesh(points, np.zeros((0, 3), dtype=np.int64), name=name, kept=kept, n_original=n_original)
     vertices, faces, kept = validate_mesh(vertices, faces, min_vertices=min_vertices,
                                           largest_component=largest_component, name=name, reason=reason)
     return Mesh(vertices, faces, name=name, kept=kept, n_original=n_original)
+
+
+def _no_faces(faces) -> bool:
+    """Whether ``faces`` holds no face at all (an empty array or list): the input is a point cloud."""
+    try:
+        return np.asarray(faces).size == 0
+    except ValueError:  # ragged: validate_mesh says where
+        return False

@@ -41,6 +41,12 @@ body cut by a plane, one side of a scan that wraps round) then has a
 well-defined outside. The orientation is called *unreliable* when even that
 volume is below :data:`CAPPED_VOLUME_MIN` of the volume of a sphere of the
 same area, e.g. for a disc-like patch.
+
+A point cloud has no triangles: its normals are estimated, turned outwards
+and checked by :func:`meshcorr.normals.estimate_normals` (principal
+components of neighbourhoods, Hoppe et al.'s orientation propagation, the
+same volume test), and its vertex areas are those of its Laplacian
+(:func:`meshcorr.laplacian.vertex_areas`); the score is then the same.
 """
 
 from __future__ import annotations
@@ -186,10 +192,29 @@ def _n_flipped(before: np.ndarray, after: np.ndarray) -> int:
 
 
 def mesh_orientation(mesh: Mesh) -> Orientation:
-    """:func:`orient_outward` of a :class:`~meshcorr.mesh.Mesh`, cached on it (the mesh is immutable)."""
+    """:func:`orient_outward` of a :class:`~meshcorr.mesh.Mesh`, cached on it (the mesh is immutable).
+
+    For a point cloud: no faces, and the reliability of its estimated normals
+    (:func:`cloud_normals`).
+    """
     key = ("orientation",)
     if key not in mesh._cache:
-        mesh._cache[key] = orient_outward(mesh.vertices, mesh.faces)
+        if mesh.is_cloud:
+            estimate = cloud_normals(mesh)
+            mesh._cache[key] = Orientation(mesh.faces, estimate.reliable, estimate.reason, 0)
+        else:
+            mesh._cache[key] = orient_outward(mesh.vertices, mesh.faces)
+    return mesh._cache[key]
+
+
+def cloud_normals(mesh: Mesh):
+    """:func:`meshcorr.normals.estimate_normals` of a point cloud, cached on it."""
+    from .laplacian import vertex_areas
+    from .normals import estimate_normals
+
+    key = ("cloud_normals",)
+    if key not in mesh._cache:
+        mesh._cache[key] = estimate_normals(mesh.vertices, vertex_areas(mesh))
     return mesh._cache[key]
 
 
@@ -227,12 +252,22 @@ def _tangent_frames(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return u, np.cross(normals, u)
 
 
-def _oriented_normals(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`vertex_normals` of the outward-oriented mesh, cached on it (the pipeline scores
-    several candidate maps between the same two meshes)."""
+def oriented_normals(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """Outward unit vertex normals ``(n, 3)`` and vertex areas ``(n,)``, cached on the mesh.
+
+    A mesh: :func:`vertex_normals` of its outward-oriented faces. A point
+    cloud: its estimated normals (:func:`cloud_normals`) and its Laplacian's
+    vertex areas. Cached because the pipeline scores several candidate maps
+    between the same two shapes.
+    """
     key = ("oriented_vertex_normals",)
     if key not in mesh._cache:
-        normals, areas = vertex_normals(mesh.vertices, mesh_orientation(mesh).faces)
+        if mesh.is_cloud:
+            from .laplacian import vertex_areas
+
+            normals, areas = np.array(cloud_normals(mesh).normals), np.array(vertex_areas(mesh))
+        else:
+            normals, areas = vertex_normals(mesh.vertices, mesh_orientation(mesh).faces)
         normals.flags.writeable = areas.flags.writeable = False
         mesh._cache[key] = normals, areas
     return mesh._cache[key]
@@ -250,7 +285,7 @@ def _neighbourhoods(source: Mesh, n_neighbors: int, n_sample: int, random_state)
     key = ("orientation_neighbourhoods", n_neighbors, n_sample, int(random_state) if seeded else None)
     if not seeded or key not in source._cache:
         X = source.vertices
-        src_normals, src_areas = _oriented_normals(source)
+        src_normals, src_areas = oriented_normals(source)
         rng = np.random.default_rng(random_state)
         n1 = len(X)
         sample = np.arange(n1) if n1 <= n_sample else np.sort(rng.choice(n1, size=n_sample, replace=False))
@@ -315,7 +350,7 @@ def _orientation_signs(source: Mesh, target: Mesh, mapping: np.ndarray, n_neighb
     (positive where the map keeps the orientation) and their areas ``(s,)``."""
     Y = target.vertices
     sample, nbrs, a, areas = _neighbourhoods(source, n_neighbors, n_sample, random_state)
-    tgt_normals, _ = _oriented_normals(target)
+    tgt_normals, _ = oriented_normals(target)
     dy = Y[mapping[nbrs]] - Y[mapping[sample], None, :]  # (s, K, 3)
     c = np.einsum("skc,skt->sct", dy, a)  # (s, 3, 2): images of u, v up to a positive factor
     triple = np.einsum("sc,sc->s", tgt_normals[mapping[sample]], np.cross(c[:, :, 0], c[:, :, 1]))

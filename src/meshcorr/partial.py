@@ -696,7 +696,8 @@ def match_part(part: Mesh, whole: Mesh, part_rows: RowFn, whole_rows: RowFn, *, 
             k = min(refine_k, part.n_vertices - 1)
             k_whole = min(int(ceil(k / ratio)), whole.n_vertices - 1)
             part_basis, whole_basis = parallel_map(
-                lambda item: laplace_basis(item[0], item[1], random_state=random_state)[1], ((part, k), (whole, k_whole)))
+                lambda item: laplace_basis(item[0], item[1], random_state=random_state)[1],
+                ((part, k), (whole, k_whole)))
             weights = np.clip(boundary_distance(part) / (BOUNDARY_BAND * np.sqrt(part.area)), 0.1, 1.0)
             mapping, history = partial_zoomout(part_basis, whole_basis, mapping, ratio=ratio, allowed=region,
                                                weights=weights, random_state=random_state)
@@ -805,9 +806,10 @@ def check_part_not_larger(part: Mesh, whole: Mesh, scale: float, *, role: str) -
 
 
 def check_roles(part: Mesh, whole: Mesh, part_rows: RowFn, whole_rows: RowFn, *, role: str) -> None:
-    """Refuse a declared part that is closed, or that the declared whole looks like a part of.
+    """Refuse a point cloud, a declared part that is closed, or one that the declared whole looks like a part of.
 
-    A closed surface is no proper part of a connected one. And when the
+    A cloud has no boundary to tell the cut by (partial clouds are not
+    handled). A closed surface is no proper part of a connected one. And when the
     declared whole has the long open boundary and the area / diameter^2 of
     a part of the declared part (:func:`partiality_suspicion` with the roles
     swapped), the roles were given the wrong way round.
@@ -818,6 +820,13 @@ def check_roles(part: Mesh, whole: Mesh, part_rows: RowFn, whole_rows: RowFn, *,
         Naming the mode to use instead.
     """
     other = "target" if role == "source" else "source"
+    clouds = [mesh.name for mesh in (part, whole) if mesh.is_cloud]
+    if clouds:
+        which = "is a point cloud" if len(clouds) == 1 else "are point clouds"
+        raise PartialityError(
+            f"partial={role!r} needs triangle meshes: {', '.join(clouds)} {which}, whose boundary (the cut) "
+            "cannot be told from its surface. Mesh the cloud first (e.g. screened Poisson reconstruction in "
+            "MeshLab), or match whole shapes (partial=None).")
     if mesh_boundary(part).n_loops == 0:
         raise PartialityError(
             f"partial={role!r} declares the {role} ({part.name}) a part of the {other}, but it is a closed "

@@ -33,6 +33,7 @@ from .mesh import Mesh, MeshLike
 from .methods import METHOD_NAMES, applicable_options, changed_options, reject_inapplicable, run_method
 from .modes import MODES, N_SAMPLES, SCALABLE_ABOVE, resolve_memory, select_mode
 from .orientation import mesh_orientation, orientation_score
+from .oriented_start import fit_oriented_map
 from .partial import (check_part_not_larger, check_partial_options, check_roles, geodesic_rows, invert_part_map,
                       match_part, part_region, partiality_suspicion)
 from .prepared import REFINE_K, PreparedShape, as_meshes, pair_shapes, pair_spectrum, shape_settings
@@ -44,6 +45,13 @@ from .selection import MapCandidate, choose_map, score_candidates
 from .symmetry import (SYMMETRY_MODES, WIDE_CANDIDATES, Candidate, candidate_ranks, choose, metric_distortion,
                        right_map_missing)
 from .timing import StageProgress, StageTimer
+
+#: How a tip assignment becomes a dense map: "distances" (meshcorr.landmark_map) or "oriented"
+#: (meshcorr.oriented_start, when the orientation is reliable); the first is named
+#: "extremities-<rank>", others get their name appended. benchmarks/selection_study.py runs both:
+#: "oriented" alone was better on TOSCA and SHREC'07 humans and much worse on gorilla -> human
+#: (benchmarks/RESULTS-robustness-trials.md), so the default stays "distances".
+EXTREMITY_STARTS: tuple[str, ...] = ("distances",)
 from .tps import mean_pairwise_distance
 
 #: Geodesic rows sampled on the source for the metric distortion of a candidate
@@ -375,17 +383,25 @@ def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, s
         tips = [find_extremities(mesh, spectrum.geodesics_from, length_unit=spectrum.max_geodesic,
                                  random_state=random_state) for mesh, spectrum in zip((src, tgt), spectra)]
         for rank, (energy, assignment) in enumerate(match_extremities(*tips)):
-            starts.append((f"extremities-{rank}", landmark_map(g1, g2, assignment),
-                           {"extremity_energy": energy}))
+            for how in EXTREMITY_STARTS if reliable else ("distances",):
+                start = (fit_oriented_map(src, tgt, g1, g2, assignment, basis_k=refine_k,
+                                          random_state=random_state) if how == "oriented"
+                         else landmark_map(g1, g2, assignment))
+                suffix = "" if how == EXTREMITY_STARTS[0] or not reliable else f"-{how}"
+                starts.append((f"extremities-{rank}{suffix}", start, {"extremity_energy": energy}))
     candidates = [MapCandidate("spectral", spectral_map)]
     if spectral_other is not None:  # unrefined: it is kept as the alternative, rarely chosen
         candidates.append(MapCandidate("spectral-alternative", spectral_other))
-    for origin, start, extra in starts:
+    def refined(start: tuple[str, np.ndarray, dict]) -> np.ndarray:
         # Only the landmarks' own map is held to them while refined: the others must show
         # by themselves whether they agree with the landmarks (meshcorr.selection).
+        origin, mapping, _ = start
         pins = pairs if origin == "landmarks" else None
-        mapping = (refine_map(src, tgt, start, k=refine_k, bijective=bijective, random_state=random_state,
-                              landmarks=pins)[0] if refine else start)
+        return refine_map(src, tgt, mapping, k=refine_k, bijective=bijective, random_state=random_state,
+                          landmarks=pins)[0] if refine else mapping
+
+    # Independent refinements, mostly BLAS and LAPACK: one thread per core (same maps as a loop).
+    for (origin, _, extra), mapping in zip(starts, parallel_map(refined, starts)):
         candidates.append(MapCandidate(origin, mapping, extra=extra))
     score_candidates(candidates, src, tgt, g1, g2, reliable=reliable, landmarks=pairs, random_state=random_state)
     chosen, alternative = choose_map(candidates, reliable=reliable)

@@ -31,7 +31,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ._params import check_int
-from .errors import ParameterError
+from .errors import MeshError, ParameterError
 from .fmap import functional_map
 from .mesh import Mesh
 
@@ -172,8 +172,17 @@ def precise_map(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 30,
     -------
     precise : PreciseMap
         Triangles in ``target.faces`` (indices into it), vertices in ``target.kept`` numbering.
+
+    Raises
+    ------
+    MeshError
+        The target is a point cloud (it has no triangles).
     """
     n_nearest = check_int("n_nearest", n_nearest, minimum=1)
+    if target.is_cloud:
+        raise MeshError(f"{target.name} is a point cloud: a precise map sends each source vertex to a point "
+                        "on a target triangle, and a cloud has none. Use the vertex map (result.map), or match "
+                        "onto a triangle mesh of the target.")
     k = min(check_int("k", k, minimum=2), source.n_vertices - 1, target.n_vertices - 1)
     fmap = functional_map(source, target, mapping, k, random_state=random_state)
     mapped = np.flatnonzero(np.asarray(mapping) >= 0)

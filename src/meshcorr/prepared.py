@@ -24,7 +24,9 @@ File format (:meth:`PreparedShape.save`, version :data:`FORMAT_VERSION`)
     ``allow_pickle=False``). The array ``header`` holds UTF-8 JSON:
     ``format`` (this version), ``meshcorr`` (the version that wrote it),
     ``settings`` (:data:`SHAPE_SETTINGS` and the resolved ``mode``),
-    ``mesh_sha256`` (:func:`mesh_digest`), ``name``, ``n_original`` and
+    ``mesh_sha256`` (:func:`mesh_digest`), ``name``, ``n_original``,
+    ``cloud`` (whether the shape is a point cloud: then ``faces`` is empty,
+    shape ``(0, 3)``; format 2 on) and
     ``entries``, the structure of the cached values: ``{"array": NAME}``,
     ``{"tuple": [...]}``, ``{"float"|"int"|"bool"|"str": value}``,
     ``{"kdtree": NAME}`` (a :class:`scipy.spatial.cKDTree` rebuilt from its
@@ -56,8 +58,8 @@ from .orientation import Orientation
 from .spectrum import Spectrum, dense_rows
 from .timing import StageTimer
 
-#: Version of the file format of :meth:`PreparedShape.save`.
-FORMAT_VERSION = 1
+#: Version of the file format of :meth:`PreparedShape.save` (2: point clouds, the header's ``cloud``).
+FORMAT_VERSION = 2
 #: Laplace-Beltrami basis size of the ZoomOut refinement (see :mod:`meshcorr.refine`).
 REFINE_K = 40
 #: The options of :func:`meshcorr.match` that change what :func:`prepare` computes, with their defaults.
@@ -171,6 +173,7 @@ class PreparedShape:
                    if (spec := _encode(value, arrays)) is not _SKIP and not _contains(spec, _SKIP)]
         header = dict(format=FORMAT_VERSION, meshcorr=_version(), settings=self.settings,
                       mesh_sha256=self.digest, name=self.mesh.name, n_original=self.mesh.n_original,
+                      cloud=self.mesh.is_cloud,
                       max_geodesic=self.spectrum.max_geodesic, entries=entries)
         arrays["header"] = np.frombuffer(json.dumps(header).encode(), dtype=np.uint8)
         buffer = io.BytesIO()
@@ -221,6 +224,10 @@ class PreparedShape:
     def _from_arrays(cls, header: dict, arrays) -> PreparedShape:
         mesh = Mesh(arrays["vertices"], arrays["faces"], name=header["name"], kept=arrays["kept"],
                     n_original=header["n_original"])
+        if bool(header.get("cloud")) != mesh.is_cloud:
+            raise PreparedShapeError(f"The prepared shape {mesh.name!r} says it is "
+                                     f"{'a point cloud' if header.get('cloud') else 'a mesh'} but holds "
+                                     f"{len(mesh.faces)} faces: the file is damaged. Prepare the shape again.")
         for key, spec in header["entries"]:
             mesh._cache[tuple(key)] = _decode(spec, arrays)
         settings = dict(header["settings"])

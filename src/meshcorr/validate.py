@@ -182,6 +182,46 @@ def _repeated_rows(rows: np.ndarray, n_values: int) -> np.ndarray:
     return first[inverse.ravel()] != np.arange(len(rows))
 
 
+def _pinched(faces: np.ndarray, n_vertices: int, corners: np.ndarray, start: np.ndarray,
+             counts: np.ndarray) -> np.ndarray:
+    """Vertices whose faces form several fans, from the sorted edges of :func:`_check_manifold`."""
+    # Corners of one vertex in two faces that share an edge containing it are
+    # in the same fan; a vertex whose corners form several fans is non-manifold.
+    shared = start[counts == 2]
+    links = np.concatenate([corners[shared], corners[shared + 1]], axis=1)  # (k, 4)
+    rows = np.concatenate([links[:, 0], links[:, 1]])
+    cols = np.concatenate([links[:, 2], links[:, 3]])
+    n_corners = 3 * len(faces)
+    graph = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n_corners, n_corners))
+    n_fans, labels = connected_components(graph, directed=False)
+    fan_vertex = np.empty(n_fans, dtype=np.int64)
+    fan_vertex[labels] = faces.ravel()
+    return np.flatnonzero(np.bincount(fan_vertex, minlength=n_vertices) > 1)
+
+
+def pinched_vertices(faces: np.ndarray, n_vertices: int) -> np.ndarray:
+    """Vertices where separate sheets of faces touch at a single point.
+
+    Parameters
+    ----------
+    faces : (m, 3) int
+        Faces of a mesh whose edges each have one or two faces.
+    n_vertices : int
+
+    Returns
+    -------
+    pinched : (p,) int
+        The vertices whose incident faces form more than one fan.
+    """
+    edges, corners = _edges(np.asarray(faces, dtype=np.int64))
+    keys = edges[:, 0] * np.int64(n_vertices) + edges[:, 1]
+    order = np.argsort(keys, kind="stable")
+    keys = keys[order]
+    start = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]])
+    counts = np.diff(np.r_[start, len(keys)])
+    return _pinched(faces, n_vertices, corners[order], start, counts)
+
+
 def _check_manifold(faces: np.ndarray, n_vertices: int, name: str) -> None:
     fix_edges = f"Repair the mesh first (e.g. {_MESHLAB}Repair non Manifold Edges)."
     repeats = np.flatnonzero(_repeated_rows(np.sort(faces, axis=1), n_vertices))
@@ -208,18 +248,7 @@ def _check_manifold(faces: np.ndarray, n_vertices: int, name: str) -> None:
             f"{name} is non-manifold: {_plural(len(bad), 'edge')} shared by more than "
             f"2 faces ({'edge' if len(bad) == 1 else 'edges'} {shown}). {fix_edges}"
         )
-    # Corners of one vertex in two faces that share an edge containing it are
-    # in the same fan; a vertex whose corners form several fans is non-manifold.
-    shared = start[counts == 2]
-    links = np.concatenate([corners[shared], corners[shared + 1]], axis=1)  # (k, 4)
-    rows = np.concatenate([links[:, 0], links[:, 1]])
-    cols = np.concatenate([links[:, 2], links[:, 3]])
-    n_corners = 3 * len(faces)
-    graph = sp.coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n_corners, n_corners))
-    n_fans, labels = connected_components(graph, directed=False)
-    fan_vertex = np.empty(n_fans, dtype=np.int64)
-    fan_vertex[labels] = faces.ravel()
-    bad = np.flatnonzero(np.bincount(fan_vertex, minlength=n_vertices) > 1)
+    bad = _pinched(faces, n_vertices, corners, start, counts)
     if len(bad):
         raise MeshError(
             f"{name} is non-manifold: {_plural(len(bad), 'vertex', 'vertices')} "

@@ -5,10 +5,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..anchors import proximity_matching
+from ..laplacian import vertex_areas
 from ..mesh import Mesh, MeshLike, as_mesh
 from ..result import Correspondence
 from ..timing import StageTimer
-from .align import align_pair, vertex_areas
+from .align import align_pair
 
 _NO_ANCHORS = np.zeros((0, 0))
 
@@ -35,8 +36,8 @@ def spatial_points(src: Mesh, tgt: Mesh, *, prealign: bool, timer: StageTimer) -
     if not prealign:
         return np.array(src.vertices), np.array(tgt.vertices)
     with timer.stage("prealign"):
-        return align_pair(src.vertices, tgt.vertices, vertex_areas(src.vertices, src.faces),
-                          vertex_areas(tgt.vertices, tgt.faces))
+        # Lumped vertex areas (of a point cloud: its Laplacian's, meshcorr.laplacian).
+        return align_pair(src.vertices, tgt.vertices, vertex_areas(src), vertex_areas(tgt))
 
 
 def nearest_map(moved: np.ndarray, Q: np.ndarray, *, bijective: bool) -> tuple[np.ndarray, np.ndarray]:

@@ -37,8 +37,8 @@ is closer to the mirrored truth than to the direct one.
 def add_parser(sub) -> None:
     p = sub.add_parser("evaluate", help=HELP, description=DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("source", metavar="SOURCE", help="mesh whose vertices were mapped")
-    p.add_argument("target", metavar="TARGET", help="mesh they were mapped onto")
+    p.add_argument("source", metavar="SOURCE", help="mesh or point cloud whose vertices were mapped")
+    p.add_argument("target", metavar="TARGET", help="mesh or point cloud they were mapped onto")
     p.add_argument("map", metavar="MAP", help="the vertex map (.txt one index per line, or .npy)")
     p.add_argument("--gt", action="append", required=True, metavar="GT",
                    help="ground truth: 'identity', a file of 0-based pairs, or a .vts pair given as "

@@ -36,6 +36,10 @@ refused (exit 2), naming it.
 
 Meshes: OFF, OBJ, PLY or STL triangle meshes (vertex order is kept as in the
 file; the README's "Reading meshes: input rules" says what is checked).
+Point clouds, for either side: any of those files without faces (e.g. a PLY
+of points), .xyz text (x y z per line; further columns are ignored) or .npy
+(an (n, 3) array); --geodesic heat or dijkstra; see the README's "Point
+clouds".
 Output: line i of MAP holds the 0-based index of the TARGET vertex matched to
 SOURCE vertex i (-1 if that vertex was not mapped, see --largest-component);
 a .npy extension writes a NumPy int64 array instead, '-o -' writes the text
@@ -48,8 +52,8 @@ error or Ctrl-C).
 def add_parser(sub) -> None:
     p = sub.add_parser("match", help=HELP, description=DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("source", metavar="SOURCE", help="mesh whose vertices are mapped")
-    p.add_argument("target", metavar="TARGET", help="mesh they are mapped onto")
+    p.add_argument("source", metavar="SOURCE", help="mesh or point cloud whose vertices are mapped")
+    p.add_argument("target", metavar="TARGET", help="mesh or point cloud they are mapped onto")
     p.add_argument("-o", "--output", metavar="MAP",
                    help="where to write the map (.txt: one index per line; .npy: NumPy array; "
                         "'-': text on stdout); may be left out with --json")

@@ -25,8 +25,8 @@ Needs matplotlib (pip install meshcorr[plot]); no display or GPU.
 def add_parser(sub) -> None:
     p = sub.add_parser("show", help=HELP, description=DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("source", metavar="SOURCE", help="mesh whose vertices were mapped")
-    p.add_argument("target", metavar="TARGET", help="mesh they were mapped onto")
+    p.add_argument("source", metavar="SOURCE", help="mesh or point cloud whose vertices were mapped")
+    p.add_argument("target", metavar="TARGET", help="mesh or point cloud they were mapped onto")
     p.add_argument("map", metavar="MAP", help="the vertex map (.txt one index per line, or .npy)")
     p.add_argument("-o", "--output", required=True, metavar="FILE.png", help="the picture to write")
     p.add_argument("--gt", action="append", metavar="GT",

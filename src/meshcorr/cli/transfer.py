@@ -25,8 +25,8 @@ transferred raw values (.npy or .txt) when FILE is a scalar field.
 def add_parser(sub) -> None:
     p = sub.add_parser("transfer", help=HELP, description=DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("source", metavar="SOURCE", help="mesh whose vertices were mapped")
-    p.add_argument("target", metavar="TARGET", help="mesh they were mapped onto")
+    p.add_argument("source", metavar="SOURCE", help="mesh or point cloud whose vertices were mapped")
+    p.add_argument("target", metavar="TARGET", help="mesh or point cloud they were mapped onto")
     p.add_argument("map", metavar="MAP", help="the vertex map (.txt one index per line, or .npy)")
     p.add_argument("--attribute", required=True, metavar="ATTR",
                    help="'colors', 'parts', 'xyz' or a per-vertex file of TARGET")
@@ -46,11 +46,15 @@ def run(args) -> int:
     from ..io import check_outputs
 
     if not args.output.lower().endswith((".ply", ".obj")):
-        raise ParameterError(f"Cannot write {args.output}: vertex colours need a .ply or .obj file.")
+        raise ParameterError(f"Cannot write {args.output}: vertex colours need a .ply or .obj file "
+                             "(.ply for a point cloud).")
     inputs = {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map, "--attribute": args.attribute}
     check_outputs({"-o": args.output, "--values-out": args.values_out}, inputs)
     V1, F1 = read_mesh(args.source, name=args.source)
     V2, F2 = read_mesh(args.target, name=args.target)
+    if not len(F1) and not args.output.lower().endswith(".ply"):
+        raise ParameterError(f"Cannot write {args.output}: SOURCE is a point cloud; its colours are written "
+                             "as a .ply file of points.")
     mapping = check_map(read_map(args.map, name="MAP"), len(V1), len(V2), name=args.map)
     values = read_attribute(args.attribute, args.target, V2, F2)
     colors, pulled = transfer_attribute(values, mapping, cmap=args.cmap)

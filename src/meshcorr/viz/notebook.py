@@ -29,8 +29,12 @@ def require_plotly():
 
 
 def _mesh3d(go, mesh: Mesh, colors: np.ndarray, name: str, scene: str):
+    """A plotly ``Mesh3d`` trace of a mesh, or a ``Scatter3d`` of dots for a point cloud."""
     v, f = np.asarray(mesh.vertices), np.asarray(mesh.faces)
     hex_colors = [f"rgb({r},{g},{b})" for r, g, b in np.asarray(colors, dtype=int)]
+    if mesh.is_cloud:
+        return go.Scatter3d(x=v[:, 0], y=v[:, 1], z=v[:, 2], mode="markers", name=name, scene=scene,
+                            marker=dict(size=2.5, color=hex_colors), hoverinfo="name")
     return go.Mesh3d(x=v[:, 0], y=v[:, 1], z=v[:, 2], i=f[:, 0], j=f[:, 1], k=f[:, 2],
                      vertexcolor=hex_colors, name=name, scene=scene, flatshading=False,
                      lighting=dict(ambient=0.55, diffuse=0.6, specular=0.1), hoverinfo="name")
@@ -42,7 +46,7 @@ def show(source: MeshLike, target: MeshLike, mapping, *, coloring: str = "parts"
 
     Parameters
     ----------
-    source, target : path, trimesh.Trimesh, Mesh or (vertices, faces)
+    source, target : path, trimesh.Trimesh, Mesh, (vertices, faces) or (n, 3) points
     mapping : (n_source,) int or Correspondence
         Target vertex of each source vertex (-1 = unmapped, drawn grey), in
         the numbering of these meshes.
@@ -57,8 +61,8 @@ def show(source: MeshLike, target: MeshLike, mapping, *, coloring: str = "parts"
     Returns
     -------
     figure : plotly.graph_objects.Figure
-        Two ``Mesh3d`` traces (source, target) in two 3-D scenes;
-        displays itself in a notebook.
+        Two ``Mesh3d`` traces (source, target; a point cloud: a ``Scatter3d``
+        of dots) in two 3-D scenes; displays itself in a notebook.
 
     Raises
     ------

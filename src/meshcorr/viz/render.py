@@ -4,8 +4,9 @@ Each mesh is drawn by projecting it orthographically, sorting its faces back
 to front (painter's algorithm) and filling them as 2-D polygons with a
 Lambert-shaded face colour (the mean of its vertices' colours). This needs
 no display, no GPU and no OpenGL, only ``pip install meshcorr[plot]``
-(matplotlib); measured ~0.1-0.3 s per mesh of a few thousand faces. It does
-not use ``mplot3d``, whose per-axes 3-D machinery is slower and whose
+(matplotlib); measured ~0.1-0.3 s per mesh of a few thousand faces. A
+point cloud (no faces) is drawn as dots sorted back to front, darker with
+depth. It does not use ``mplot3d``, whose per-axes 3-D machinery is slower and whose
 aspect handling distorts meshes; a 2-D ``PolyCollection`` in an equal-aspect
 axes is all a fixed view needs.
 
@@ -39,6 +40,7 @@ class Panel:
     ----------
     vertices : (n, 3) float
     faces : (m, 3) int
+        ``m = 0`` for a point cloud, drawn as dots.
     colors : (n, 3) uint8
         Per-vertex RGB colour.
     title : str
@@ -108,6 +110,17 @@ def _shaded_polygons(vertices, faces, colors, frame):
     return tri[order, :, :2], face_rgb[order]
 
 
+def _shaded_points(vertices, colors, frame):
+    """Projected points sorted far to near, with depth-cued RGB colours in [0, 1] (a cloud has no normals)."""
+    projected = vertices @ frame.T
+    order = np.argsort(projected[:, 2], kind="stable")
+    depth = projected[:, 2]
+    span = float(np.ptp(depth)) or 1.0
+    shade = 0.55 + 0.45 * (depth - depth.min()) / span  # nearer is brighter
+    rgb = np.clip(colors.astype(np.float64) / 255.0 * shade[:, None], 0.0, 1.0)
+    return projected[order, :2], rgb[order]
+
+
 def _draw_panel(fig, ax, panel: Panel, frame: np.ndarray) -> None:
     from matplotlib.collections import PolyCollection
 
@@ -119,11 +132,16 @@ def _draw_panel(fig, ax, panel: Panel, frame: np.ndarray) -> None:
             f"Panel colours must have shape ({len(vertices)}, 3), one RGB per vertex. "
             f"Got {colors.shape} instead."
         )
-    polygons, face_rgb = _shaded_polygons(vertices, faces, colors, frame)
-    # Edges in the face colour hide the hairline seams anti-aliasing leaves between faces.
-    ax.add_collection(PolyCollection(polygons, facecolors=face_rgb, edgecolors=face_rgb,
-                                     linewidths=0.3, antialiased=True))
-    xy = polygons.reshape(-1, 2)
+    if faces.size == 0:  # a point cloud: dots, about as many pixels per point as the panel allows
+        xy, rgb = _shaded_points(vertices, colors, frame)
+        ax.scatter(xy[:, 0], xy[:, 1], c=rgb, s=float(np.clip(6000.0 / max(len(xy), 1), 0.5, 12.0)),
+                   marker="o", linewidths=0)
+    else:
+        polygons, face_rgb = _shaded_polygons(vertices, faces, colors, frame)
+        # Edges in the face colour hide the hairline seams anti-aliasing leaves between faces.
+        ax.add_collection(PolyCollection(polygons, facecolors=face_rgb, edgecolors=face_rgb,
+                                         linewidths=0.3, antialiased=True))
+        xy = polygons.reshape(-1, 2)
     lo, hi = xy.min(axis=0), xy.max(axis=0)
     pad = 0.04 * float(max(hi - lo)) + 1e-12
     ax.set_xlim(lo[0] - pad, hi[0] + pad)

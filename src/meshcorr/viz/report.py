@@ -4,7 +4,7 @@ The page holds everything it needs: the meshes, their colours and the
 viewer (``report_viewer.js``, a few hundred lines of plain JavaScript,
 inlined), so it opens offline in any browser. The source and target are
 drawn side by side in two 2-D canvases (orthographic projection, faces
-sorted back to front, two-sided Lambert shading) that share one rotation:
+sorted back to front, two-sided Lambert shading; a point cloud as dots) that share one rotation:
 dragging either view turns both. The target is coloured by part and the
 source through the map, as in :func:`meshcorr.viz.figures.correspondence_figure`
 (Jain & Zhang 2006, Figures 7-8). Below the views: the stage timings, the

@@ -1,5 +1,6 @@
 // meshcorr report viewer: linked, rotatable views of coloured meshes drawn on 2-D canvases
-// (orthographic projection, painter's algorithm, two-sided Lambert shading). No dependencies.
+// (orthographic projection, painter's algorithm, two-sided Lambert shading; point clouds as dots).
+// No dependencies.
 (function () {
   "use strict";
   var errors = document.getElementById("errors");
@@ -50,6 +51,18 @@
         P[3 * i] = w / 2 + s * (R[0] * x + R[1] * y + R[2] * z);
         P[3 * i + 1] = h / 2 - s * (R[3] * x + R[4] * y + R[5] * z);
         P[3 * i + 2] = R[6] * x + R[7] * y + R[8] * z;
+      }
+      if (m === 0) {  // a point cloud: dots sorted back to front, brighter when nearer
+        var pts = new Array(n), zlo = Infinity, zhi = -Infinity;
+        for (i = 0; i < n; i++) { pts[i] = i; zlo = Math.min(zlo, P[3 * i + 2]); zhi = Math.max(zhi, P[3 * i + 2]); }
+        pts.sort(function (p, q) { return P[3 * p + 2] - P[3 * q + 2]; });
+        var size = Math.max(1.5, Math.min(5, 2200 / Math.sqrt(n) / 10));
+        for (var t = 0; t < n; t++) {
+          i = pts[t];
+          var cue = 0.55 + 0.45 * (P[3 * i + 2] - zlo) / ((zhi - zlo) || 1);
+          ctx.fillStyle = "rgb(" + ((cue * C[3 * i]) | 0) + "," + ((cue * C[3 * i + 1]) | 0) + "," + ((cue * C[3 * i + 2]) | 0) + ")";
+          ctx.fillRect(P[3 * i] - size / 2, P[3 * i + 1] - size / 2, size, size);
+        }
       }
       for (var f = 0; f < m; f++) {
         order[f] = f;

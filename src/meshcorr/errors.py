@@ -36,9 +36,17 @@ class PreparedShapeError(MeshcorrError, ValueError):
     """A prepared shape (or cache file) was made for another mesh, other settings or another version."""
 
 
+class PartialityError(ParameterError):
+    """The declared partiality (``partial=``) contradicts the shapes, or does not go with another option."""
+
+
 class MeshWarning(UserWarning):
     """A mesh was changed on input (e.g. polygons triangulated) or is suspicious."""
 
 
 class MemoryLimitError(ParameterError):
     """The chosen mode would need more memory than it is allowed (see ``max_memory``)."""
+
+
+class PartialShapeWarning(MeshWarning):
+    """One shape looks like a part of the other, but ``partial`` was not given (see :mod:`meshcorr.partial`)."""

@@ -33,9 +33,14 @@ the vertex-level noise of a nearest-neighbour map.
 Winding is repaired with ``trimesh.repair.fix_winding`` (a traversal of the
 face adjacency) and turned outwards by the sign of the enclosed volume. For an
 open mesh the enclosed volume depends on the reference point (the holes are
-not closed): the orientation is called *unreliable* when that sign changes
-between the centroid and the corners of the bounding box, e.g. for a
-disc-like patch.
+not closed). When that sign changes between the centroid and the corners of
+the bounding box, each boundary loop is closed by a fan of triangles to its
+centroid (for the volume only) and the closed surface's volume, which no
+longer depends on the reference point, decides: a part of a closed shape (a
+body cut by a plane, one side of a scan that wraps round) then has a
+well-defined outside. The orientation is called *unreliable* when even that
+volume is below :data:`CAPPED_VOLUME_MIN` of the volume of a sphere of the
+same area, e.g. for a disc-like patch.
 
 A point cloud has no triangles: its normals are estimated, turned outwards
 and checked by :func:`meshcorr.normals.estimate_normals` (principal
@@ -55,6 +60,11 @@ from ._params import check_int
 from .errors import ParameterError
 from .landmarks import farthest_point_sampling
 from .mesh import Mesh
+
+#: An open mesh whose capped volume (module docstring) is below this fraction of the volume of a
+#: sphere of the same area, :math:`A^{3/2} / (6 \sqrt{\pi})`, has no reliable outside (a flat
+#: disc: 0; a hemisphere: 1.4; TOSCA shapes cut to 60-90 % of their area: 0.3-0.8).
+CAPPED_VOLUME_MIN = 0.02
 
 
 @dataclass(frozen=True)
@@ -128,10 +138,48 @@ def orient_outward(vertices: np.ndarray, faces: np.ndarray) -> Orientation:
         volumes = -volumes
     reliable, reason = True, ""
     if not (volumes > 0).all():
-        reliable = False
-        reason = ("the mesh is open and its holes are too large to tell its outside from its inside "
-                  "(the enclosed volume changes sign with the reference point)")
+        capped = _capped_volume(V, fixed)
+        area = float(0.5 * np.linalg.norm(np.cross(V[fixed[:, 1]] - V[fixed[:, 0]],
+                                                   V[fixed[:, 2]] - V[fixed[:, 0]]), axis=1).sum())
+        if abs(capped) < CAPPED_VOLUME_MIN * area ** 1.5 / (6.0 * np.sqrt(np.pi)):
+            reliable = False
+            reason = ("the mesh is open and its holes are too large to tell its outside from its inside "
+                      "(the enclosed volume changes sign with the reference point, and is about 0 with "
+                      "the holes closed)")
+        elif capped < 0:
+            fixed = fixed[:, ::-1].copy()
     return Orientation(fixed, reliable, reason, _n_flipped(faces, fixed))
+
+
+def _capped_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
+    """Volume enclosed by the consistently wound ``faces`` with each boundary loop closed by a fan.
+
+    Each boundary half-edge ``(a, b)`` adds the triangle ``(b, a, c)`` with
+    ``c`` the centroid of its loop's vertices, so that every edge of the
+    capped surface is used once in each direction and the volume
+    (divergence theorem) does not depend on the reference point.
+    """
+    from .boundary import boundary_edges
+
+    n = len(vertices)
+    edges = boundary_edges(faces, n)
+    volume = _signed_volumes(vertices, faces, vertices.mean(axis=0)[None, :])[0]
+    if len(edges) == 0:
+        return float(volume)
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    graph = sp.coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    _, labels = connected_components(graph, directed=False)
+    loop = labels[edges[:, 0]]
+    on_loop = np.unique(edges)
+    counts = np.bincount(labels[on_loop], minlength=labels.max() + 1)
+    centroids = np.stack([np.bincount(labels[on_loop], weights=vertices[on_loop, c], minlength=len(counts))
+                          for c in range(3)], axis=1) / np.maximum(counts, 1)[:, None]
+    centre = vertices.mean(axis=0)
+    a, b, c = vertices[edges[:, 1]] - centre, vertices[edges[:, 0]] - centre, centroids[loop] - centre
+    volume += np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0
+    return float(volume)
 
 
 def _n_flipped(before: np.ndarray, after: np.ndarray) -> int:

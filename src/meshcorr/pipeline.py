@@ -25,7 +25,7 @@ from ._params import check_choice, check_float, check_int
 from ._threads import parallel_map
 from .anchors import EXACT_PAIRS, anchor_descriptors, embedding_neighbours, proximity_matching, select_anchors
 from .curvature import curvature_disagreement
-from .errors import MeshWarning, ParameterError
+from .errors import MeshWarning, ParameterError, PartialShapeWarning
 from .extremities import find_extremities, match_extremities
 from .icp import tps_icp
 from .landmark_map import check_landmarks, landmark_map
@@ -34,6 +34,8 @@ from .methods import METHOD_NAMES, applicable_options, changed_options, reject_i
 from .modes import MODES, N_SAMPLES, SCALABLE_ABOVE, resolve_memory, select_mode
 from .orientation import mesh_orientation, orientation_score
 from .oriented_start import fit_oriented_map
+from .partial import (check_part_not_larger, check_partial_options, check_roles, geodesic_rows, invert_part_map,
+                      match_part, part_region, partiality_suspicion)
 from .prepared import REFINE_K, PreparedShape, as_meshes, pair_shapes, pair_spectrum, shape_settings
 from .progress import as_progress
 from .refine import prefetch_bases, refine_map
@@ -70,7 +72,7 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
           method: str = "spectral", prealign: bool = True,
           symmetry: str = "auto", refine: bool = True, refine_k: int = REFINE_K,
           anchor_scale: str = "embedding", landmarks=None, extremities: bool = True,
-          n_landmarks=_RENAMED) -> Correspondence:
+          partial: str | None = None, n_landmarks=_RENAMED) -> Correspondence:
     """Dense vertex correspondence from ``source`` to ``target``.
 
     Parameters
@@ -158,12 +160,28 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         (:mod:`meshcorr.extremities`) and keep the map the whole-map energies
         prefer (:mod:`meshcorr.selection`); needed when the shapes'
         proportions differ. Used with ``symmetry="auto"``.
+    partial : {None, "source", "target"}
+        None: both shapes are whole (they may have small holes).
+        ``"source"``: the source is a part of the target (one side of a scan,
+        a shape cut by a plane or with large holes); ``"target"``: the target
+        is a part of the source. The map then covers the part only (with
+        ``"target"``, source vertices outside the matched region get -1), and
+        ``result.matched_region`` / ``result.matched_area_fraction`` say which
+        region of the whole shape was matched (:mod:`meshcorr.partial`; the
+        options of steps 1-7 shape one of its starting maps). A declared part
+        must have a boundary and must not be larger than the whole;
+        ``bijective=True``, a ``symmetry`` other than "auto" and a method
+        other than "spectral" do not go with it (each raises
+        :class:`~meshcorr.errors.PartialityError`). When it is None and one
+        shape has a long open boundary the other lacks,
+        :class:`~meshcorr.errors.PartialShapeWarning` names the mode to use.
 
     Returns
     -------
     result : Correspondence
         ``result.map[i]`` is the target vertex of source vertex i.
     """
+    check_partial_options(partial, method, changed_options(match, locals()))  # PartialityError
     reject_inapplicable(method, changed_options(match, locals()))  # ParameterError naming unused options
     progress = as_progress(progress)
     if check_choice("method", method, METHOD_NAMES) != "spectral":
@@ -192,6 +210,14 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         shapes = pair_shapes(source, target, settings)
         src, tgt = as_meshes(*shapes)
         pairs = check_landmarks(landmarks, src, tgt)
+    if partial is not None:  # a part against the whole: meshcorr.partial; steps 1-7 give one start
+        spectral_options = dict(k=k, geodesic=geodesic, scale_eigenvalues=scale_eigenvalues, reorder=reorder,
+                                icp_iterations=icp_iterations, n_control=n_control, anneal=anneal,
+                                n_anchors=n_anchors, anchor_weight=anchor_weight, anchor_scale=anchor_scale,
+                                largest_component=largest_component, mode=mode, n_samples=n_samples,
+                                max_memory=max_memory, scalable_above=scalable_above, refine=refine,
+                                refine_k=refine_k, random_state=random_state)
+        return _match_partial(shapes, pairs, partial, spectral_options, extremities=extremities, timer=timer)
 
     mode = select_mode(mode, src.n_vertices, tgt.n_vertices, max_memory=max_memory,
                        scalable_above=scalable_above, bijective=bijective)
@@ -201,6 +227,9 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         # Steps 1-3: geodesic distances, Gaussian affinities, scaled spectral embedding.
         spectra = [pair_spectrum(shape, settings, mode, timer) for shape in shapes]
         X, Y = spectra[0].embedding, spectra[1].embedding
+        suspicion = partiality_suspicion(src, tgt, spectra[0].max_geodesic, spectra[1].max_geodesic)
+        if suspicion:  # a part given as a whole shape (meshcorr.partial)
+            warnings.warn(suspicion, PartialShapeWarning, stacklevel=2)
 
         # Step 4: eigenvector reordering and sign correction.
         with timer.stage("reorder"):
@@ -276,6 +305,64 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         candidates=summaries, alternative_map=alternative_map, orientation_reliable=reliable,
         refine_history=refine_history, map_candidates=map_candidates,
     )
+
+
+def _match_partial(shapes, pairs: np.ndarray | None, partial: str, spectral_options: dict, *, extremities: bool,
+                   timer: StageTimer) -> Correspondence:
+    """A part against the whole shape (:func:`meshcorr.partial.match_part`), as a Correspondence.
+
+    Steps 1-7 with ``spectral_options`` (and no extremities) map the part
+    into the whole once: that map and its alternative are two of the starts
+    :func:`~meshcorr.partial.match_part` chooses from. With
+    ``partial="target"`` the target is mapped into the source and the map is
+    turned round (:func:`meshcorr.partial.invert_part_map`): source vertices
+    outside the matched region get -1.
+    """
+    geodesic, refine, refine_k = (spectral_options[key] for key in ("geodesic", "refine", "refine_k"))
+    random_state = spectral_options["random_state"]
+    src, tgt = as_meshes(*shapes)
+    ordered = shapes if partial == "source" else shapes[::-1]
+    part, whole = as_meshes(*ordered)
+    part_rows, whole_rows = geodesic_rows(part, geodesic), geodesic_rows(whole, geodesic)
+    check_roles(part, whole, part_rows, whole_rows, role=partial)
+    if pairs is not None and partial == "target":
+        pairs = pairs[:, ::-1].copy()
+    with timer.stage("spectral"), warnings.catch_warnings():
+        # The Jain-Zhang map of the part is one start among the others: right when the cut leaves the
+        # shape's global structure (its warnings, e.g. of partiality, do not apply here).
+        warnings.simplefilter("ignore", MeshWarning)
+        spectral = match(*ordered, extremities=False, **spectral_options)
+    initial = [("spectral", spectral.local_map())]
+    if spectral.alternative_map is not None:  # input numbering -> the meshes' local numbering
+        to_local = np.full(whole.n_original, -1, dtype=np.int64)
+        to_local[whole.kept] = np.arange(whole.n_vertices)
+        initial.append(("spectral-alternative", to_local[spectral.alternative_map[part.kept]]))
+    found = match_part(part, whole, part_rows, whole_rows, landmarks=pairs, extremities=extremities,
+                       initial_maps=initial, refine=refine, refine_k=refine_k, random_state=random_state, timer=timer)
+    check_part_not_larger(part, whole, found.scale, role=partial)
+    local_map, other_map = found.mapping, found.alternative
+    if partial == "target":
+        with timer.stage("region"):
+            local_map = invert_part_map(whole, found.mapping, found.region)
+            other_map = None if other_map is None else invert_part_map(
+                whole, other_map, part_region(part, whole, other_map, found.scale))
+    full_maps = []
+    for mapping in (local_map, other_map):
+        full = None
+        if mapping is not None:
+            full = np.full(src.n_original, -1, dtype=np.int64)
+            mapped = mapping >= 0
+            full[src.kept[mapped]] = tgt.kept[mapping[mapped]]
+        full_maps.append(full)
+    region = np.zeros(whole.n_original, dtype=bool)
+    region[whole.kept[found.region]] = True
+    params = dict(spectral_options, extremities=extremities, symmetry="auto", partial=partial,
+                  landmarks=None if pairs is None else (pairs if partial == "source" else pairs[:, ::-1]).tolist())
+    return Correspondence(
+        map=full_maps[0], source=src, target=tgt, source_vertices=src.kept.copy(), target_vertices=tgt.kept.copy(),
+        timings=timer.timings, params=params, alternative_map=full_maps[1], orientation_reliable=found.reliable,
+        refine_history=found.history, map_candidates=found.candidates, partial=partial, matched_region=region,
+        matched_area_fraction=found.area_fraction)
 
 
 def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, spectral_other,

@@ -25,7 +25,7 @@ from .reorder import Configuration
 
 #: Array attributes written by :meth:`Correspondence.save`.
 _ARRAYS = ("map", "cost", "source_vertices", "target_vertices", "source_embedding", "target_embedding",
-           "aligned_target_embedding", "anchors", "alternative_map")
+           "aligned_target_embedding", "anchors", "alternative_map", "matched_region")
 #: Attributes that are no JSON and no array.
 _SPECIAL = ("configuration", "alternatives", "eigenvalues", "source", "target")
 
@@ -114,6 +114,15 @@ class Correspondence:
         error, and ``chosen`` / ``alternative`` flags. Empty when that stage
         did not run (``symmetry="cost"`` or ``"mirror"``, ``extremities=False``
         without landmarks).
+    partial : {None, "source", "target"}
+        Which shape was declared a part of the other (:mod:`meshcorr.partial`);
+        None for a whole-to-whole map.
+    matched_region : (n_whole,) bool or None
+        With ``partial``: the vertices of the whole shape (the target for
+        ``"source"``, the source for ``"target"``; input numbering) that have
+        a counterpart on the part. None for a whole-to-whole map.
+    matched_area_fraction : float or None
+        With ``partial``: the area of ``matched_region`` over the whole shape's area.
     source, target : Mesh or None
         The meshes as matched (after ``largest_component``), kept without
         their cached geodesic matrices; None if not recorded.
@@ -143,6 +152,9 @@ class Correspondence:
     orientation_reliable: bool | None = None
     refine_history: list = field(default_factory=list)
     map_candidates: list[dict] = field(default_factory=list)
+    partial: str | None = None
+    matched_region: np.ndarray | None = None
+    matched_area_fraction: float | None = None
     source: Mesh | None = field(default=None, repr=False, compare=False)
     target: Mesh | None = field(default=None, repr=False, compare=False)
     version: str = __version__
@@ -185,7 +197,17 @@ class Correspondence:
             "candidates": self.candidates,
             "orientation_reliable": self.orientation_reliable,
             "refine": {"iterations": len(self.refine_history), "history": self.refine_history},
+            "partial": self._partial_summary(),
         }
+
+    def _partial_summary(self) -> dict | None:
+        """The partial mode's report: which shape is whole, the matched region's vertices and area share."""
+        if self.partial is None or self.matched_region is None:
+            return None
+        matched = np.flatnonzero(self.matched_region)
+        return {"part": self.partial, "whole": "target" if self.partial == "source" else "source",
+                "matched_area_fraction": round(float(self.matched_area_fraction), 4),
+                "n_matched_vertices": int(len(matched)), "matched_vertices": matched.tolist()}
 
     # ------------------------------------------------------------------ display
 
@@ -194,6 +216,9 @@ class Correspondence:
         n_target = self.target.n_original if self.target is not None else None
         return {"method": self.method, "n_source": int(len(self.map)), "n_mapped": int(mapped.sum()),
                 "n_target": n_target, "n_target_hit": int(len(np.unique(self.map[mapped]))),
+                "partial": self.partial,
+                "matched_area_fraction": (None if self.matched_area_fraction is None
+                                          else round(float(self.matched_area_fraction), 3)),
                 "seconds": round(float(sum(self.timings.values())), 2), "version": self.version}
 
     def __repr__(self) -> str:
@@ -210,6 +235,8 @@ class Correspondence:
                 ("configuration", self.configuration.to_dict() if self.configuration else "-"),
                 ("ICP iterations", f"{len(self.icp_history)} (converged: {self.icp_converged})"),
                 ("refinement iterations", len(self.refine_history)),
+                *([("partial", f"the {head['partial']} is a part; matched region: "
+                       f"{head['matched_area_fraction']:.1%} of the whole")] if head["partial"] else []),
                 ("seconds", head["seconds"]),
                 ("meshcorr", self.version)]
         cells = "".join(f"<tr><th style='text-align:left'>{html.escape(str(k))}</th>"

@@ -77,6 +77,9 @@ class Settings:
     extremities : bool
         Also try maps started from matched shape extremities and keep the
         one the whole-map energies prefer (with ``symmetry="auto"``).
+    partial : {None, "source", "target"}
+        Which shape is a part of the other (:mod:`meshcorr.partial`); None:
+        both are whole.
     bijective : bool
         One-to-one map (equal vertex counts only).
     largest_component : bool
@@ -111,6 +114,7 @@ class Settings:
     refine_k: int = _match_default("refine_k")
     landmarks: Sequence[tuple[int, int]] | np.ndarray | None = None
     extremities: bool = True
+    partial: str | None = None
     # the output and the input
     bijective: bool = False
     largest_component: bool = False

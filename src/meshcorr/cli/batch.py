@@ -63,6 +63,9 @@ def add_parser(sub) -> None:
     g.add_argument("--mode", choices=MODES, default="auto", help="dense, scalable or auto (default: auto)")
     g.add_argument("--samples", type=int, default=N_SAMPLES, metavar="N",
                    help=f"Nystrom samples of the scalable mode (default: {N_SAMPLES})")
+    g.add_argument("--partial", choices=("source", "target"), default=None,
+                   help="in every pair, the SOURCE (or the TARGET) is a part of the other shape "
+                        "(as 'meshcorr match --partial'; default: both whole)")
     g.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="any other option of meshcorr.match, e.g. --set symmetry=cost (repeatable)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
@@ -130,6 +133,8 @@ def run(args) -> int:
     pairs = _pairs(args)
     options = dict(_options(args.set), k=args.k, geodesic=args.geodesic, random_state=args.seed,
                    refine=args.refine, mode=args.mode, n_samples=args.samples)
+    if args.partial is not None:
+        options["partial"] = args.partial
     client = None
     if args.scheduler:
         from ..collection import connect

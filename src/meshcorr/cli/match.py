@@ -109,6 +109,11 @@ def add_parser(sub) -> None:
     g.add_argument("--no-extremities", dest="extremities", action="store_false",
                    help="do not try maps started from matched shape extremities (faster; they are "
                         "what holds when the shapes' proportions differ)")
+    g.add_argument("--partial", choices=("source", "target"), default=None,
+                   help="SOURCE is a part of TARGET (one side of a scan, a cut, large holes), or the reverse: "
+                        "the map covers the part only (with 'target', SOURCE vertices outside the matched "
+                        "region get -1) and --json reports the matched region of the whole shape "
+                        "(default: both are whole)")
     g.add_argument("--anchor-scale", choices=("embedding", "geodesic"), default="embedding",
                    help="scale of the anchor term: the embedding's length scale, or geodesics divided "
                         "by the largest one as in the paper (default: embedding)")
@@ -202,7 +207,7 @@ def run(args) -> int:
                    method=args.method, prealign=args.prealign, mode=args.mode,
                    n_samples=args.n_samples, max_memory=args.max_memory,
                    scalable_above=args.scalable_above, refine_k=args.refine_k, landmarks=landmarks,
-                   extremities=args.extremities)
+                   extremities=args.extremities, partial=args.partial)
     if args.alternative_out and result.alternative_map is None:
         raise ParameterError(f"No alternative map to write to {args.alternative_out}: only the spectral "
                              "method with at least two eigenvector configurations has one.")
@@ -229,6 +234,11 @@ def run(args) -> int:
         if where:
             print(f"meshcorr: wrote {where}: {summary['n_mapped']} source vertices mapped; they land on "
                   f"{summary['n_target_hit']} distinct target vertices ({total:.1f} s)", file=sys.stderr)
+        if summary["partial"] is not None:
+            report = summary["partial"]
+            print(f"meshcorr: the {report['part']} is a part of the {report['whole']}: the matched region is "
+                  f"{report['matched_area_fraction']:.0%} of the {report['whole']}'s area "
+                  f"({report['n_matched_vertices']} vertices, listed in --json)", file=sys.stderr)
         for what, path in (("alternative map", args.alternative_out), ("report", args.report)):
             if path:
                 print(f"meshcorr: wrote the {what} {path}", file=sys.stderr)

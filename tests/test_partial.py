@@ -1,0 +1,265 @@
+"""Partial shapes (meshcorr.partial): a part against the whole, the matched region, warnings and refusals."""
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+import trimesh
+
+import meshcorr
+from meshcorr import cuts
+from meshcorr import datasets as ds
+from meshcorr.boundary import boundary_distance, mesh_boundary
+from meshcorr.cli import main
+from meshcorr.errors import PartialityError, PartialShapeWarning
+from meshcorr.evaluation import geodesic_errors
+from meshcorr.landmarks import farthest_point_sampling
+from meshcorr.mesh import as_mesh
+from meshcorr.orientation import orient_outward
+from meshcorr.partial import (check_part_not_larger, geodesic_rows, match_part, matched_region,
+                              partiality_suspicion)
+
+#: Mean geodesic error / sqrt(target area) a partial map must stay under (measured: 0.016-0.03).
+ERROR_TOLERANCE = 0.06
+#: Least intersection over union of the reported matched region with the true one (measured: 0.85-0.9).
+IOU_TOLERANCE = 0.75
+
+
+@pytest.fixture(scope="module")
+def pair():
+    """The creature at rest (source side) and bent, rotated, moved and re-indexed (target side).
+
+    Returns the two meshes and ``truth``: source vertex -> its target vertex.
+    """
+    rest = ds.creature(resolution=1)
+    bent = ds.creature(resolution=1, pose="bent", random_state=1)
+    moved, index = ds.rigid_copy(bent, random_state=3)
+    truth = index[ds.ground_truth(rest, bent)]
+    back = ds.ground_truth(bent, rest)[np.argsort(index)]  # target vertex -> source vertex
+    return as_mesh((rest.vertices, rest.faces), name="rest"), as_mesh((moved.vertices, moved.faces), name="bent"), \
+        truth, back
+
+
+def _error(target, mapping, truth):
+    return float(geodesic_errors(target, mapping, truth).mean())
+
+
+def _iou(a, b):
+    return float((a & b).sum() / (a | b).sum())
+
+
+@pytest.fixture(scope="module")
+def plane_part(pair):
+    source, target, truth, back = pair
+    part, kept = cuts.cut_by_plane(source, keep=0.7, random_state=0)
+    return part, kept, meshcorr.match(part, target, partial="source")
+
+
+def test_a_plane_cut_maps_into_the_right_region_of_the_whole(pair, plane_part):
+    source, target, truth, back = pair
+    part, kept, result = plane_part
+    assert result.partial == "source" and result.map.shape == (part.n_vertices,) and (result.map >= 0).all()
+    assert _error(target, result.map, truth[kept]) < ERROR_TOLERANCE
+    inside = np.zeros(source.n_vertices, dtype=bool)
+    inside[kept] = True
+    true_region = inside[back]  # target vertices whose counterpart lies on the part
+    assert result.matched_region.shape == (target.n_vertices,)
+    assert _iou(result.matched_region, true_region) > IOU_TOLERANCE
+    assert result.matched_area_fraction == pytest.approx(part.area / source.area, abs=0.15)
+    # The default whole-to-whole map of the same part is far off (measured 0.5): the mode matters.
+    assert result.orientation_reliable is True
+
+
+def test_removed_geodesic_balls(pair):
+    source, target, truth, back = pair
+    part, kept = cuts.remove_balls(source, keep=0.9, n_balls=3, random_state=0)
+    assert 0.6 < part.area / source.area < 0.9
+    result = meshcorr.match(part, target, partial="source")
+    assert _error(target, result.map, truth[kept]) < ERROR_TOLERANCE
+    inside = np.zeros(source.n_vertices, dtype=bool)
+    inside[kept] = True
+    assert _iou(result.matched_region, inside[back]) > IOU_TOLERANCE
+
+
+def test_reverse_mode_maps_the_whole_source_onto_a_part_target(pair):
+    source, target, truth, back = pair
+    part, kept = cuts.cut_by_plane(target, keep=0.75, random_state=1)
+    result = meshcorr.match(source, part, partial="target")
+    assert result.map.shape == (source.n_vertices,)
+    lookup = np.full(target.n_vertices, -1)
+    lookup[kept] = np.arange(len(kept))
+    has_counterpart = lookup[truth] >= 0
+    mapped = result.map >= 0
+    assert _iou(mapped, has_counterpart) > IOU_TOLERANCE
+    np.testing.assert_array_equal(mapped, result.matched_region)  # the region is on the whole: the source
+    both = mapped & has_counterpart
+    assert _error(part, result.map[both], lookup[truth[both]]) < ERROR_TOLERANCE
+    assert result.summary()["partial"]["whole"] == "source"
+
+
+def _diameter(mesh):
+    return farthest_point_sampling(geodesic_rows(mesh), mesh.n_vertices, 8, random_state=0).diameter
+
+
+def _suspicion(a, b):
+    return partiality_suspicion(a, b, _diameter(a), _diameter(b))
+
+
+def test_undeclared_part_warns_and_names_the_mode(pair):
+    source, target, truth, back = pair
+    part, _ = cuts.cut_by_plane(source, keep=0.7, random_state=2)  # area / diameter^2: 0.67 x the whole's
+    with pytest.warns(PartialShapeWarning, match=r"partial='source'.*--partial source"):
+        meshcorr.match(part, target, refine=False, extremities=False)
+    assert "partial='target'" in _suspicion(target, part)
+
+
+def test_whole_shapes_and_small_holes_do_not_warn(pair):
+    source, target, truth, back = pair
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", PartialShapeWarning)
+        meshcorr.match(source, target, refine=False, extremities=False)
+    holed, _ = cuts.punch_holes(source, n_holes=4, hole_area=0.01, random_state=0)
+    other, _ = cuts.punch_holes(target, n_holes=4, hole_area=0.01, random_state=1)
+    # On a coarse mesh a hole's loop is as long as a cut's (0.58 x sqrt(area) here): the boundary alone
+    # would warn; area / diameter^2 (0.95 x the whole's) tells the holes apart.
+    assert mesh_boundary(holed).n_loops == 4 and mesh_boundary(holed).longest > 0.5
+    assert _suspicion(holed, target) == "" and _suspicion(holed, other) == ""
+
+
+def test_a_part_of_a_closed_shape_has_a_reliable_outside():
+    V, F = ds.sphere(subdivisions=3)
+    part, kept = cuts.cut_by_plane(as_mesh((V, F)), keep=0.6, normal=[0.3, 0.2, 1.0])
+    o = orient_outward(part.vertices, part.faces[:, ::-1])  # wound inwards on purpose
+    assert o.reliable  # the uncapped volume changes sign with the reference point here (unreliable before)
+    normals = np.cross(*(part.vertices[o.faces[:, i]] - part.vertices[o.faces[:, 0]] for i in (1, 2)))
+    centres = part.vertices[o.faces].mean(axis=1)
+    assert (np.einsum("ij,ij->i", normals, centres) > 0).mean() > 0.99  # outward on a sphere
+
+
+def test_boundary_loops_and_distance():
+    V, F = ds.sphere(subdivisions=3)
+    ball = as_mesh((V, F))
+    assert mesh_boundary(ball).n_loops == 0 and mesh_boundary(ball).longest == 0.0
+    assert np.isinf(boundary_distance(ball)).all()
+    cap, _ = cuts.cut_by_plane(ball, keep=0.5, normal=[0, 0, 1])  # a hemisphere: the equator is its boundary
+    boundary = mesh_boundary(cap)
+    assert boundary.n_loops == 1
+    assert 2 * np.pi < boundary.lengths[0] < 1.2 * 2 * np.pi  # the equator, zigzagging along the edges
+    assert boundary.longest == pytest.approx(boundary.lengths[0] / np.sqrt(cap.area))
+    distance = boundary_distance(cap)
+    assert distance[boundary.vertices].max() == 0.0
+    top = np.argmin(cap.vertices[:, 2])  # the plane keeps x . n <= t: the lower half
+    assert distance[top] == pytest.approx(np.pi / 2, rel=0.1)  # pole to equator along the sphere
+
+
+def test_matched_region_fills_the_gaps_of_a_map_and_keeps_the_outline():
+    V, F = ds.sphere(subdivisions=4)
+    ball = as_mesh((V, F))
+    upper = np.flatnonzero(V[:, 2] > 0.2)
+    images = upper[::3]  # a map that is not onto: a third of the upper cap
+    region = matched_region(ball, images, reach=0.05, closing=0.15)
+    assert region[upper].mean() > 0.97  # the gaps are filled
+    assert (V[region, 2] > 0.05).all()  # the outline did not grow by more than the reach
+
+
+def test_result_with_a_matched_region_saves_and_loads(plane_part, tmp_path):
+    part, kept, result = plane_part
+    path = tmp_path / "partial.npz"
+    result.save(path)
+    loaded = meshcorr.Correspondence.load(path)
+    np.testing.assert_array_equal(loaded.matched_region, result.matched_region)
+    assert loaded.partial == "source" and loaded.matched_area_fraction == result.matched_area_fraction
+    assert "partial" in result._repr_html_() and "matched_area_fraction" in repr(result)
+
+
+def test_prepared_shapes_give_the_same_partial_map(pair, plane_part):
+    source, target, truth, back = pair
+    part, kept, result = plane_part
+    again = meshcorr.match(meshcorr.prepare(part), meshcorr.prepare(target), partial="source")
+    np.testing.assert_array_equal(again.map, result.map)
+    np.testing.assert_array_equal(again.matched_region, result.matched_region)
+
+
+def test_cli_partial_json_reports_the_matched_region(pair, plane_part, tmp_path, capsys):
+    source, target, truth, back = pair
+    part, kept, result = plane_part
+    src, tgt = tmp_path / "part.off", tmp_path / "whole.ply"
+    trimesh.Trimesh(part.vertices, part.faces, process=False).export(src)
+    trimesh.Trimesh(target.vertices, target.faces, process=False).export(tgt)
+    out = tmp_path / "map.txt"
+    assert main(["match", str(src), str(tgt), "-o", str(out), "--partial", "source", "--json"]) == 0
+    captured = capsys.readouterr()
+    report = json.loads(captured.out)["partial"]
+    np.testing.assert_array_equal(np.loadtxt(out, dtype=np.int64), result.map)
+    assert report["part"] == "source" and report["whole"] == "target"
+    np.testing.assert_array_equal(report["matched_vertices"], np.flatnonzero(result.matched_region))
+    assert report["matched_area_fraction"] == pytest.approx(result.matched_area_fraction, abs=1e-4)
+    assert "matched region" in captured.err
+
+
+# ---------------------------------------------------------------------------------------------- refusals
+
+
+@pytest.mark.parametrize("options, message", [
+    (dict(partial="both"), "must be None, 'source'"),
+    (dict(partial="source", bijective=True), "cannot be one-to-one"),
+    (dict(partial="source", method="icp"), "mode of the spectral method"),
+    (dict(partial="source", symmetry="cost"), "symmetry='cost' is not available"),
+    (dict(partial="source", extremities=False), "starts from matched extremities or from landmarks"),
+])
+def test_options_that_do_not_go_with_partial_are_refused(pair, plane_part, options, message):
+    source, target, truth, back = pair
+    part, kept, _ = plane_part
+    with pytest.raises(PartialityError, match=message):
+        meshcorr.match(part, target, **options)
+
+
+def test_a_closed_shape_declared_a_part_is_refused(pair, plane_part):
+    source, target, truth, back = pair
+    part, kept, _ = plane_part
+    with pytest.raises(PartialityError, match=r"closed surface.*use partial='target'"):
+        meshcorr.match(target, part, partial="source")
+
+
+def test_a_declared_part_larger_than_the_whole_is_refused(pair):
+    source, target, truth, back = pair
+    holed, _ = cuts.punch_holes(source, n_holes=3, hole_area=0.01, random_state=0)  # open, nearly whole
+    part, _ = cuts.cut_by_plane(target, keep=0.6, random_state=2)
+    with pytest.raises(PartialityError, match=r"the target looks like the part.*use partial='target'"):
+        meshcorr.match(holed, part, partial="source")
+
+
+def test_no_start_at_all_is_refused(plane_part, pair):
+    source, target, truth, back = pair
+    part, kept, _ = plane_part
+    with pytest.raises(PartialityError, match="No start for a partial map"):
+        match_part(part, target, geodesic_rows(part), geodesic_rows(target), extremities=False)
+
+
+def test_cli_refuses_partial_with_bijective_without_a_traceback(plane_part, pair, tmp_path, capsys):
+    source, target, truth, back = pair
+    part, kept, _ = plane_part
+    src, tgt = tmp_path / "part.off", tmp_path / "whole.off"
+    trimesh.Trimesh(part.vertices, part.faces, process=False).export(src)
+    trimesh.Trimesh(target.vertices, target.faces, process=False).export(tgt)
+    code = main(["match", str(src), str(tgt), "-o", str(tmp_path / "map.txt"), "--partial", "source",
+                 "--bijective"])
+    err = capsys.readouterr().err
+    assert code == 2 and "cannot be one-to-one" in err and "Traceback" not in err
+    assert not (tmp_path / "map.txt").exists()
+
+
+def test_a_part_whose_area_at_the_fitted_scale_exceeds_the_whole_is_refused(pair, plane_part):
+    source, target, truth, back = pair
+    part, kept, result = plane_part
+    check_part_not_larger(part, target, 1.0, role="source")  # 0.7 of the area at the same scale: fine
+    with pytest.raises(PartialityError, match=r"the source is larger: 1\.\d\d times the target's area"):
+        check_part_not_larger(part, target, 1.5, role="source")  # 0.7 x 1.5^2 = 1.6
+
+
+def test_a_point_cloud_is_refused_in_the_partial_mode(pair, plane_part):
+    source, target, truth, back = pair
+    part, kept, _ = plane_part
+    with pytest.raises(PartialityError, match="needs triangle meshes: .* is a point cloud"):
+        meshcorr.match(part.vertices, target, partial="source")

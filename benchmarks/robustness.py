@@ -34,6 +34,7 @@ is absent. pyFM is optional (``pip install pyfmaps``).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import itertools
 import os
@@ -249,18 +250,9 @@ def main(argv=None) -> int:
         return 0
     sets = build_sets(args.quick)
     chosen = args.sets or list(sets)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    done = set()
-    rows: list[dict] = []
-    if args.out.is_file():
-        with args.out.open() as handle:
-            rows = list(csv.DictReader(handle))
-        done = {(r["set"], r["source"], r["target"], r["method"]) for r in rows}
-    new_file = not args.out.is_file()
-    with args.out.open("a", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=FIELDS)
-        if new_file:
-            writer.writeheader()
+    rows = previous_rows(args.out)
+    done = {(r["set"], r["source"], r["target"], r["method"]) for r in rows}
+    with appending(args.out, FIELDS) as (handle, writer):
         for name in chosen:
             subset = _spread(sets[name], args.pyfm_pairs)
             for pair in sets[name]:
@@ -280,6 +272,26 @@ def main(argv=None) -> int:
     text = markdown(summarize(with_paired_subset(rows)))
     publish(text, "robustness.py", argv, args.report)
     return 0
+
+
+def previous_rows(path: Path) -> list[dict]:
+    """The rows of an earlier, possibly interrupted run (none if ``path`` does not exist)."""
+    if not path.is_file():
+        return []
+    with path.open() as handle:
+        return list(csv.DictReader(handle))
+
+
+@contextlib.contextmanager
+def appending(path: Path, fields: list[str]):
+    """``(handle, csv.DictWriter)`` appending to ``path``; the header is written when the file is new."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    new_file = not path.is_file()
+    with path.open("a", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=fields)
+        if new_file:
+            writer.writeheader()
+        yield handle, writer
 
 
 def publish(text: str, script: str, argv, report: Path | None) -> None:

@@ -40,7 +40,6 @@ is absent.
 from __future__ import annotations
 
 import argparse
-import csv
 import inspect
 import sys
 import time
@@ -55,7 +54,8 @@ from meshcorr import cuts
 from meshcorr.errors import MeshcorrError
 from meshcorr.evaluation import GeodesicCache
 from meshcorr.mesh import Mesh, as_mesh
-from robustness import DATA, Pair, _spread, markdown, publish, score_points, summarize, tosca_pairs
+from robustness import (DATA, Pair, _spread, appending, markdown, previous_rows, publish, score_points, summarize,
+                        tosca_pairs)
 
 CASES = ("clean", "cloud", "cloud-noisy", "partial-plane", "partial-balls", "holes")
 MESH_CASES = ("clean", "partial-plane", "partial-balls", "holes")
@@ -248,17 +248,9 @@ def main(argv=None) -> int:
     n_pairs, n_poses = (4, 1) if args.quick else (args.pairs, args.poses)
     pairs = tosca_pairs(DATA / "tosca5k", "tosca5k", n_pairs) + sumner_pairs(DATA / "sumner", n_poses)
     pyfm_subset = _spread(pairs, args.pyfm_pairs)
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    rows: list[dict] = []
-    if args.out.is_file():
-        with args.out.open() as handle:
-            rows = list(csv.DictReader(handle))
+    rows = previous_rows(args.out)
     done = {(r["set"], r["source"], r["target"], r["method"]) for r in rows}
-    new_file = not args.out.is_file()
-    with args.out.open("a", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=FIELDS)
-        if new_file:
-            writer.writeheader()
+    with appending(args.out, FIELDS) as (handle, writer):
         for index, pair in enumerate(pairs):
             todo = [(c, m) for c in args.cases for m in args.methods
                     if wanted(c, m, pair, pyfm_subset) and (c, pair.source_name, pair.target_name, m) not in done]

@@ -68,14 +68,13 @@ from scipy.spatial import cKDTree
 
 from ._threads import parallel_map
 from .boundary import boundary_distance, mesh_boundary
-from .curvature import curvature_disagreement
 from .errors import PartialityError
 from .extremities import MAX_EXTREMITIES, Extremities, find_extremities
 from .landmarks import farthest_point_sampling
 from .mesh import Mesh
-from .orientation import mesh_orientation, orientation_score, regional_orientation, vertex_normals
+from .orientation import mesh_orientation, vertex_normals
 from .refine import _nearest_rows, laplace_basis
-from .selection import LANDMARK_RADIUS, MapCandidate, choose_map
+from .selection import LANDMARK_RADIUS, MapCandidate, choose_map, score_orientation
 from .timing import StageTimer
 
 RowFn = Callable[[int], np.ndarray]
@@ -731,10 +730,7 @@ def _candidate(origin: str, pairs: np.ndarray | None, start: np.ndarray | None, 
     candidate.distortion, candidate.extra["scale"] = fitted_distortion(
         part_rows, whole_rows, mapping, _sources(interior, random_state), interior)
     if reliable:
-        candidate.orientation = orientation_score(part, whole, mapping, random_state=random_state)
-        candidate.curvature = curvature_disagreement(part, whole, mapping, random_state=random_state)
-        candidate.regional_orientation = float(
-            regional_orientation(part, whole, mapping, random_state=random_state).min())
+        score_orientation(candidate, part, whole, random_state=random_state)
     if landmarks is not None:
         rows = [whole_rows(int(b)) for b in landmarks[:, 1]]
         errors = np.array([row[mapping[a]] for row, a in zip(rows, landmarks[:, 0])])

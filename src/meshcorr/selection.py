@@ -134,14 +134,29 @@ def score_candidates(candidates: list[MapCandidate], source, target, source_geod
         mapping = candidate.mapping
         candidate.distortion = metric_distortion(source_geodesics, target_geodesics, mapping, sources, rows)
         if reliable:
-            candidate.orientation = orientation_score(source, target, mapping, random_state=random_state)
-            candidate.curvature = curvature_disagreement(source, target, mapping, random_state=random_state)
-            candidate.regional_orientation = float(
-                regional_orientation(source, target, mapping, random_state=random_state).min())
+            score_orientation(candidate, source, target, random_state=random_state)
         if landmarks is not None:
             errors = np.array([target_geodesics(int(b))[mapping[a]] for a, b in landmarks])
             candidate.landmark_error = float(errors.mean())
             candidate.landmarks_kept = float(np.mean(errors <= LANDMARK_RADIUS))
+
+
+def score_orientation(candidate: MapCandidate, source, target, *, random_state: int | None = 0) -> None:
+    """Fill in a candidate's orientation, curvature disagreement and worst regional orientation, in place.
+
+    Parameters
+    ----------
+    candidate : MapCandidate
+    source, target : Mesh
+        Both with a reliable outside (:func:`meshcorr.orientation.mesh_orientation`).
+    random_state : int or None
+        Seed of the samples.
+    """
+    mapping = candidate.mapping
+    candidate.orientation = orientation_score(source, target, mapping, random_state=random_state)
+    candidate.curvature = curvature_disagreement(source, target, mapping, random_state=random_state)
+    candidate.regional_orientation = float(
+        regional_orientation(source, target, mapping, random_state=random_state).min())
 
 
 def choose_map(candidates: list[MapCandidate], *, reliable: bool

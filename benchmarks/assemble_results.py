@@ -9,7 +9,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 ORDER = ["core", "baselines", "evaluation", "scale", "front", "refine", "symmetry", "viz", "robustness",
-         "robustness-trials", "collections", "reliability", "tests", "texture"]
+         "robustness-trials", "collections", "scans", "partial", "reliability", "tests", "texture"]
 TITLES = {
     "core": "Core dense pipeline on TOSCA (issue 2)",
     "baselines": "The paper's baselines vs spectral (issue 3)",
@@ -21,6 +21,8 @@ TITLES = {
     "viz": "Pictures and report (issue 4)",
     "robustness": "Right maps on data nobody tuned for, against pyFM (issue 12)",
     "robustness-trials": "What was tried for the whole-map choice (issue 12)",
+    "scans": "Scans as they come: point clouds, partial shapes, holes (issue 15)",
+    "partial": "Partial shapes, case by case (issue 15)",
     "collections": "Shape collections: prepare once, batch on Dask (issue 13)",
     "reliability": "Reliability: interrupts, fuzzing, soak (issue 16)",
     "tests": "Tests that notice broken code: mutation runs (issue 17)",

@@ -187,7 +187,7 @@ def fit_oriented_map(source: Mesh, target: Mesh, source_geodesics: RowFn, target
         orientation += _commutator_normal(o_s / norm, o_t / norm)
     H += W_ORIENTATION * orientation * np.trace(H) / max(np.trace(orientation), 1e-12)
     C = np.linalg.solve(H + 1e-9 * np.trace(H) / (k * k) * np.eye(k * k), rhs).reshape((k, k), order="F")
-    mapping = _nearest_rows(phi_s @ C, phi_t, dtype=np.float32)
+    mapping = _nearest_rows(phi_s @ C, phi_t)
     mapping[pairs[:, 0]] = pairs[:, 1]
     return mapping
 

@@ -43,6 +43,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ._params import check_int
+from .boundary import boundary_edges
 from .errors import ParameterError
 from .mesh import Mesh
 from .laplacian import laplacian
@@ -98,14 +99,9 @@ def _curvature_field(mesh: Mesh, signed: bool = True) -> tuple[np.ndarray, np.nd
 
 
 def _on_boundary(mesh: Mesh) -> np.ndarray:
-    """``(n,)`` bool: vertices on an edge that only one face uses (none on a point cloud)."""
-    faces = np.asarray(mesh.faces)
-    edges = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
-    keys = edges[:, 0] * np.int64(mesh.n_vertices) + edges[:, 1]
-    unique, counts = np.unique(keys, return_counts=True)
-    single = unique[counts == 1]
+    """``(n,)`` bool: vertices on an edge that only one face uses."""
     boundary = np.zeros(mesh.n_vertices, dtype=bool)
-    boundary[single // mesh.n_vertices] = boundary[single % mesh.n_vertices] = True
+    boundary[boundary_edges(mesh.faces, mesh.n_vertices).ravel()] = True
     return boundary
 
 

@@ -49,6 +49,7 @@ from __future__ import annotations
 import numpy as np
 
 from .landmark_map import RowFn, landmark_descriptors
+from .laplacian import vertex_areas
 from .mesh import Mesh
 from .orientation import mesh_orientation
 from .refine import _nearest_rows, laplace_basis
@@ -193,10 +194,6 @@ def fit_oriented_map(source: Mesh, target: Mesh, source_geodesics: RowFn, target
 
 
 def _unit_masses(mesh: Mesh) -> np.ndarray:
-    """Lumped vertex areas summing to 1 (the bases' mass matrix; a point cloud's from its Laplacian)."""
-    from .laplacian import vertex_areas
-    from .orientation import vertex_normals
-
-    areas = (vertex_areas(mesh) if mesh.is_cloud
-             else vertex_normals(np.asarray(mesh.vertices), np.asarray(mesh.faces))[1])
+    """Lumped vertex areas summing to 1: the bases' mass matrix (a mesh's or a point cloud's)."""
+    areas = vertex_areas(mesh)
     return areas / areas.sum()

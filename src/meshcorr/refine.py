@@ -141,25 +141,25 @@ def _laplace_basis(mesh: Mesh, k: int, random_state: int | None,
 _NEAREST_BLOCK = 1 << 20
 
 
-def _nearest_rows(queries: np.ndarray, points: np.ndarray, *, dtype=np.float64) -> np.ndarray:
+def _nearest_rows(queries: np.ndarray, points: np.ndarray) -> np.ndarray:
     """Index of the nearest row of ``points`` for each row of ``queries``.
 
     Brute force in row blocks (BLAS), faster than a KD-tree in the 20-60
-    dimensions of a spectral basis. ``dtype=np.float32`` halves the time of
-    the products (measured at 5k x 5k x 40), but near-ties (relative
-    difference ~1e-6) then resolve differently, even with another number of
-    BLAS threads: the pipeline keeps double precision.
+    dimensions of a spectral basis. In double precision: single precision
+    halves the time of the products (measured at 5k x 5k x 40), but near-ties
+    (relative difference ~1e-6) then resolve differently with another number
+    of BLAS threads, and the same inputs must give the same map.
     """
-    queries, points = np.asarray(queries, dtype=dtype), np.asarray(points, dtype=dtype)
+    queries, points = np.asarray(queries, dtype=np.float64), np.asarray(points, dtype=np.float64)
     # |q - p|^2 - |q|^2 = [q, 1] . [-2 p, |p|^2]: one product per block, no separate pass adding |p|^2
     # (25 % faster at 5k x 5k x 40).
     augmented_points = np.vstack([-2.0 * points.T, np.einsum("ij,ij->i", points, points)[None, :]])
-    augmented_queries = np.hstack([queries, np.ones((len(queries), 1), dtype=dtype)])
+    augmented_queries = np.hstack([queries, np.ones((len(queries), 1))])
     out = np.empty(len(queries), dtype=np.int64)
     step = max(1, min(len(queries), _NEAREST_BLOCK // max(1, len(points))))
     # One buffer for every block: fresh 30 MB temporaries per block cost as
     # much in page faults as the products themselves (measured at 5k).
-    buffer = np.empty((step, len(points)), dtype=dtype)
+    buffer = np.empty((step, len(points)))
     for start in range(0, len(queries), step):
         block = augmented_queries[start:start + step]
         out[start:start + step] = np.argmin(np.matmul(block, augmented_points, out=buffer[:len(block)]), axis=1)
@@ -292,8 +292,6 @@ def zoomout(source_basis: np.ndarray, target_basis: np.ndarray, mapping: np.ndar
         return out, history
     if n2 > PRUNE_ABOVE:
         return _nearest_rows_pruned(queries, target_basis, random_state=random_state), history
-    # Double precision: in single precision near-ties resolved differently with the number of BLAS
-    # threads (1 vertex in 5000 on TOSCA), and the same inputs must give the same map everywhere.
     return _nearest_rows(queries, target_basis), history
 
 

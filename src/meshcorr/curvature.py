@@ -43,7 +43,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ._params import check_int
-from .boundary import boundary_edges
+from .boundary import mesh_boundary
 from .errors import ParameterError
 from .mesh import Mesh
 from .laplacian import laplacian
@@ -101,7 +101,7 @@ def _curvature_field(mesh: Mesh, signed: bool = True) -> tuple[np.ndarray, np.nd
 def _on_boundary(mesh: Mesh) -> np.ndarray:
     """``(n,)`` bool: vertices on an edge that only one face uses."""
     boundary = np.zeros(mesh.n_vertices, dtype=bool)
-    boundary[boundary_edges(mesh.faces, mesh.n_vertices).ravel()] = True
+    boundary[mesh_boundary(mesh).vertices] = True  # cached on the mesh: the partiality check uses it too
     return boundary
 
 

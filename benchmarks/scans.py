@@ -21,11 +21,11 @@ points that exist on the case's source: the mean geodesic error divided by
 sqrt(target area), flips counted and forgiven (mirrored truth), as in
 ``benchmarks/robustness.py``. A cloud point stands for the mesh vertex nearest
 to the surface point it was sampled from. Methods: ``meshcorr`` (default
-settings, plus ``partial="source"`` on the partial cases when meshcorr offers
-it), ``meshcorr-plain`` (default settings on the partial cases, i.e. without
-the partial mode) and pyFM's automatic pipeline on the mesh cases of a few
-pairs (it takes no point clouds). Cases or methods a version of meshcorr does
-not support are recorded as such.
+settings, plus ``partial="source"`` on the partial cases), ``meshcorr-plain``
+(default settings on the partial cases, i.e. without the partial mode) and
+pyFM's automatic pipeline on the mesh cases of a few pairs (it takes no point
+clouds). A case that meshcorr refuses (MeshcorrError) is recorded with its
+message instead of an error.
 
 Rows are appended to a CSV as they finish, so an interrupted run resumes.
 Usage::
@@ -40,7 +40,6 @@ is absent.
 from __future__ import annotations
 
 import argparse
-import inspect
 import sys
 import time
 from dataclasses import dataclass, field
@@ -160,10 +159,6 @@ def _restricted(name, pair, source_part, source_kept, target_input, target_verte
                 options, kept_area)
 
 
-def _offers_partial() -> bool:
-    return "partial" in inspect.signature(meshcorr.match).parameters
-
-
 def run_method(case: Case, method: str) -> tuple[np.ndarray | None, float, str]:
     """Map of the case's source inputs (as original target vertices), seconds, and a status."""
     start = time.perf_counter()
@@ -173,7 +168,7 @@ def run_method(case: Case, method: str) -> tuple[np.ndarray | None, float, str]:
 
             mapping = pyfm_map(case.source, case.target)
         else:
-            options = case.options if method == "meshcorr" and _offers_partial() else {}
+            options = case.options if method == "meshcorr" else {}
             mapping = meshcorr.match(case.source, case.target, **options).map
     except MeshcorrError as error:
         return None, time.perf_counter() - start, f"unsupported: {str(error).splitlines()[0][:120]}"

@@ -5,7 +5,9 @@ with both ways of turning a tip assignment into a dense map
 (``meshcorr.pipeline.EXTREMITY_STARTS = ("oriented", "distances")``) and
 records, per candidate map, its scores (orientation, distortion, curvature,
 regional orientation) and its errors against the truth (flips counted and
-forgiven, flipped, partly swapped). ``--rules`` then replays choice rules on
+forgiven, flipped, partly swapped), and saves the candidate maps themselves
+beside the CSV (``<out>.maps/<set>__<source>__<target>.npz``, one array per
+origin), so that new energies can be studied without running the pairs again. ``--rules`` then replays choice rules on
 the dump without running anything again: which map each rule would keep,
 and its mean error per set.
 
@@ -71,6 +73,11 @@ def dump(per_set: int, out: Path) -> None:
                 result = meshcorr.match(source, target)
                 chosen = {c["origin"] for c in result.map_candidates if c["chosen"]}
                 cache = GeodesicCache("heat")
+                maps_dir = out.with_suffix(".maps")
+                maps_dir.mkdir(exist_ok=True)
+                # The candidate maps themselves, so that new energies can be studied without rerunning.
+                np.savez_compressed(maps_dir / f"{name}__{pair.source_name}__{pair.target_name}.npz",
+                                    **{c.origin: c.mapping for c in captured[0]})
                 for candidate in captured[0]:
                     # Candidate maps are in the meshes' local numbering; these meshes drop no vertex.
                     errors = score(pair, target, candidate.mapping, cache)

@@ -42,6 +42,7 @@ from .refine import prefetch_bases, refine_map
 from .reorder import REORDER_MODES, Configuration, rank_configurations
 from .result import Correspondence
 from .selection import MapCandidate, choose_map, score_candidates
+from .shells import shell_refine
 from .symmetry import (SYMMETRY_MODES, WIDE_CANDIDATES, Candidate, candidate_ranks, choose, metric_distortion,
                        right_map_missing)
 from .timing import StageProgress, StageTimer
@@ -70,7 +71,7 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
           progress: StageProgress | None = None, mode: str = "auto", n_samples: int = N_SAMPLES,
           max_memory: int | str | None = None, scalable_above: int = SCALABLE_ABOVE,
           method: str = "spectral", prealign: bool = True,
-          symmetry: str = "auto", refine: bool = True, refine_k: int = REFINE_K,
+          symmetry: str = "auto", refine: bool = True, refine_k: int = REFINE_K, shells: bool = True,
           anchor_scale: str = "embedding", landmarks=None, extremities: bool = True,
           partial: str | None = None, n_landmarks=_RENAMED) -> Correspondence:
     """Dense vertex correspondence from ``source`` to ``target``.
@@ -144,6 +145,14 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         Refine the map by ZoomOut spectral upsampling (:mod:`meshcorr.refine`).
     refine_k : int
         Laplace-Beltrami basis size of the refinement.
+    shells : bool
+        After the refinement, align the shapes' smooth shells (their
+        coordinates low-passed to a growing number of Laplace-Beltrami
+        functions) by a rigid motion and a smooth deformation, and map in the
+        product of that space and the spectral one (:mod:`meshcorr.shells`,
+        after Smooth Shells). Meshes only, with ``refine`` and without
+        ``bijective`` (point clouds, partial shapes and one-to-one maps keep
+        the ZoomOut map).
     anchor_scale : {"embedding", "geodesic"}
         "embedding": the anchor term is expressed in the embedding's length
         scale (its geodesics times mean embedding distance / (h x mean
@@ -271,6 +280,10 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
             local_map, other_map, map_candidates, spectral_kept = _whole_map_choice(
                 src, tgt, spectra, chosen.mapping, other_map, pairs, extremities=extremities, refine=refine,
                 refine_k=refine_k, bijective=bijective, reliable=reliable, random_state=random_state)
+    if refine and shells and not bijective and not (src.is_cloud or tgt.is_cloud):
+        with timer.stage("shells"):  # meshcorr.shells: extrinsic alignment of the chosen map
+            local_map = shell_refine(src, tgt, local_map, k=refine_k, landmarks=pairs, random_state=random_state)
+        spectral_kept = False
     icp, anchors = chosen.extra["icp"], chosen.extra["anchors"]
 
     full_map = np.full(src.n_original, -1, dtype=np.int64)
@@ -290,7 +303,7 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
                   n_anchors=n_anchors, anchor_weight=anchor_weight, bijective=bijective,
                   largest_component=largest_component, random_state=random_state, mode=mode,
                   n_samples=n_samples, max_memory=max_memory, symmetry=symmetry, refine=refine,
-                  refine_k=refine_k, anchor_scale=anchor_scale, extremities=extremities,
+                  refine_k=refine_k, shells=shells, anchor_scale=anchor_scale, extremities=extremities,
                   landmarks=None if pairs is None else np.stack([src.kept[pairs[:, 0]], tgt.kept[pairs[:, 1]]],
                                                                 axis=1).tolist())
     return Correspondence(

@@ -70,6 +70,8 @@ class Settings:
         ZoomOut refinement of the map.
     refine_k : int
         Laplace-Beltrami basis size of the refinement.
+    shells : bool
+        Align the shapes' smooth shells after the refinement (:mod:`meshcorr.shells`).
     landmarks : (p, 2) int or None
         Known vertex pairs ``(source vertex, target vertex)``, input
         numbering: they start a candidate map, decide among the candidates
@@ -112,6 +114,7 @@ class Settings:
     symmetry: str = "auto"
     refine: bool = True
     refine_k: int = _match_default("refine_k")
+    shells: bool = True
     landmarks: Sequence[tuple[int, int]] | np.ndarray | None = None
     extremities: bool = True
     partial: str | None = None

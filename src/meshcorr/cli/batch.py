@@ -60,6 +60,8 @@ def add_parser(sub) -> None:
     g.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     g.add_argument("--refine", action=argparse.BooleanOptionalAction, default=True,
                    help="ZoomOut refinement (default: on)")
+    g.add_argument("--shells", action=argparse.BooleanOptionalAction, default=True,
+                   help="smooth-shell alignment after the refinement, meshes only (default: on)")
     g.add_argument("--mode", choices=MODES, default="auto", help="dense, scalable or auto (default: auto)")
     g.add_argument("--samples", type=int, default=N_SAMPLES, metavar="N",
                    help=f"Nystrom samples of the scalable mode (default: {N_SAMPLES})")
@@ -132,7 +134,7 @@ def run(args) -> int:
 
     pairs = _pairs(args)
     options = dict(_options(args.set), k=args.k, geodesic=args.geodesic, random_state=args.seed,
-                   refine=args.refine, mode=args.mode, n_samples=args.samples)
+                   refine=args.refine, shells=args.shells, mode=args.mode, n_samples=args.samples)
     if args.partial is not None:
         options["partial"] = args.partial
     client = None

@@ -106,6 +106,9 @@ def add_parser(sub) -> None:
     g.add_argument("--landmarks-vts", nargs=2, metavar=("SOURCE.vts", "TARGET.vts"),
                    help="landmarks as a TOSCA-style .vts pair instead: line k of each file is the "
                         "1-based vertex of landmark k on that mesh")
+    g.add_argument("--shells", action=argparse.BooleanOptionalAction, default=True,
+                   help="after the refinement, align the shapes' smooth shells (a rigid motion and a smooth "
+                        "deformation) and map in that space and the spectral one; meshes only (default: on)")
     g.add_argument("--no-extremities", dest="extremities", action="store_false",
                    help="do not try maps started from matched shape extremities (faster; they are "
                         "what holds when the shapes' proportions differ)")
@@ -206,7 +209,7 @@ def run(args) -> int:
                                                f"{os.path.basename(args.target)}"),
                    method=args.method, prealign=args.prealign, mode=args.mode,
                    n_samples=args.n_samples, max_memory=args.max_memory,
-                   scalable_above=args.scalable_above, refine_k=args.refine_k, landmarks=landmarks,
+                   scalable_above=args.scalable_above, refine_k=args.refine_k, shells=args.shells, landmarks=landmarks,
                    extremities=args.extremities, partial=args.partial)
     if args.alternative_out and result.alternative_map is None:
         raise ParameterError(f"No alternative map to write to {args.alternative_out}: only the spectral "

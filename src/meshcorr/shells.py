@@ -1,0 +1,190 @@
+"""Refinement of a vertex map in the product of spectral and embedding space (after Smooth Shells).
+
+ZoomOut (:mod:`meshcorr.refine`) maps each vertex to its nearest neighbour
+in a 40-function Laplace-Beltrami basis. When the shapes are not isometric
+(a gorilla and a man, two people of different builds) the higher
+eigenfunctions of the two shapes stop corresponding, and the map slides
+locally. The shapes themselves still say where a point goes once one is
+deformed onto the other: this stage aligns the two surfaces *extrinsically*,
+by a smooth deformation expressed in the same bases, coarse to fine.
+
+It follows Smooth Shells (M. Eisenberger, Z. Lähner, D. Cremers, "Smooth
+Shells: Multi-Scale Shape Registration with Functional Maps", CVPR 2020): a
+shape's *shell* at scale :math:`k` is its coordinates low-passed to the first
+:math:`k` eigenfunctions,
+
+.. math::
+
+    X_i^{(k)} = \\Phi_i^{(k)} \\Phi_i^{(k)\\top} M_i X_i ,
+
+(coordinates scaled to unit area and centred; :math:`\\Phi_i^\\top M_i \\Phi_i = I`).
+For :math:`k = k_0 < \\dots < K`, given the current map :math:`T`:
+
+- **rigid motion**: the proper rotation and translation that best move the
+  source shell onto the target shell's images (Kabsch, weighted by vertex
+  area): the shapes may come in any position;
+- **deformation**: the displacement the map still asks of the source shell,
+  low-passed to the same :math:`k` functions (the least-squares smooth
+  deformation in the span of :math:`\\Phi_1^{(k)}`),
+  :math:`D = \\Phi_1^{(k)} \\Phi_1^{(k)\\top} M_1 (X_2^{(k)}[T] - X_1^{(k)})`,
+  and the deformed shell :math:`Y = X_1^{(k)} + D`;
+- **functional map**: :math:`C_k`, the orthogonal fit of
+  :math:`\\Phi_1^{(k)} C \\approx \\Phi_2^{(k)}[T]` (as in ZoomOut);
+- **new map**: each source vertex goes to the nearest target vertex in the
+  product space
+  :math:`[\\,Y,\\; w_n\\, n(Y),\\; w_s\\, \\Phi_1^{(k)} C_k\\,]` against
+  :math:`[\\,X_2^{(k)},\\; w_n\\, n(X_2^{(k)}),\\; w_s\\, \\Phi_2^{(k)}\\,]`,
+  with :math:`n(\\cdot)` the vertex normals of a shell.
+
+A last step does the same with the coordinates themselves (:math:`k = K`,
+no low pass). Unlike Smooth Shells this uses hard nearest-neighbour
+assignments (no soft correspondences, no Markov-chain search for the
+start): the start is the map the pipeline chose, and this stage only
+refines it. The normals keep facing surfaces apart (an arm against the
+body); the spectral term keeps the map on the part ZoomOut put it on.
+
+Measured (``benchmarks/RESULTS-robustness.md``): on the development pairs of
+every set the error from the same start drops by 20-30 % (TOSCA 5k
+0.029 -> 0.021, gorilla -> human 0.12 -> 0.10, SHREC'07 humans 0.077 ->
+0.058, four-legged 0.12 -> 0.09). The weights :data:`NORMAL_WEIGHT` and
+:data:`SPECTRAL_WEIGHT` were chosen on those sets together
+(``benchmarks/RESULTS-robustness-trials.md``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+
+from ._params import check_int
+from ._threads import parallel_map
+from .errors import ParameterError
+from .laplacian import vertex_areas
+from .mesh import Mesh
+from .refine import PRUNE_ABOVE, _basis_size, _nearest_rows, _nearest_rows_pruned, laplace_basis
+
+#: Weight of the shells' unit normals against coordinates of a unit-area shape.
+NORMAL_WEIGHT = 0.3
+#: Weight of the spectral coordinates (unit-area normalised eigenfunctions).
+SPECTRAL_WEIGHT = 0.1
+#: Basis sizes of the coarse-to-fine steps (clipped to the basis size).
+SCALES = (8, 12, 16, 24, 32, 40)
+#: Source vertices sampled for the coarse steps (all of them below this).
+N_SAMPLE = 1000
+
+
+def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40,
+                 scales: tuple[int, ...] = SCALES, n_sample: int = N_SAMPLE,
+                 landmarks: np.ndarray | None = None, random_state: int | None = 0) -> np.ndarray:
+    """Refine a vertex map by aligning the shapes' smooth shells (module docstring).
+
+    Parameters
+    ----------
+    source, target : Mesh
+        Triangle meshes (not point clouds: the shells' normals need faces).
+    mapping : (n1,) int
+        ``mapping[i]``: target vertex of source vertex i, e.g. ZoomOut's map.
+    k : int
+        Laplace-Beltrami basis size :math:`K` (clipped to the vertex counts;
+        the same bases as the ZoomOut refinement's, cached on the meshes).
+    scales : tuple of int
+        Basis sizes of the coarse-to-fine steps, ascending.
+    n_sample : int
+        Source vertices sampled (seeded) for the coarse steps; the last step
+        maps every vertex.
+    landmarks : (L, 2) int, optional
+        Known (source, target) vertex pairs, held in the map at every step.
+    random_state : int or None
+        Seed of the bases' start vectors and of the sample.
+
+    Returns
+    -------
+    mapping : (n1,) int
+        The refined map.
+    """
+    if source.is_cloud or target.is_cloud:
+        raise ParameterError("Shell refinement needs triangle meshes (the shells' normals need faces); "
+                             "point clouds keep the ZoomOut map.")
+    n1, n2 = source.n_vertices, target.n_vertices
+    mapping = np.asarray(mapping, dtype=np.int64)
+    if mapping.shape != (n1,) or (n1 and (mapping.min() < 0 or mapping.max() >= n2)):
+        raise ParameterError(f"The map to refine must hold one target vertex in [0, {n2}) per source vertex "
+                             f"({n1}). Got shape {mapping.shape}.")
+    n_sample = check_int("n_sample", n_sample, minimum=1)
+    k = _basis_size(k, source, target)
+    scales = tuple(s for s in scales if s < k)
+    phi1, phi2 = parallel_map(lambda mesh: laplace_basis(mesh, k, random_state=random_state)[1],
+                              (source, target))
+    (x1, m1), (x2, m2) = _unit_shape(source), _unit_shape(target)
+    rng = np.random.default_rng(random_state)
+    sample = np.arange(n1) if n1 <= n_sample else np.sort(rng.choice(n1, size=n_sample, replace=False))
+    weights = m1[sample] / m1[sample].sum()  # the sample's share of the mass-weighted projection
+    mapping = mapping.copy()
+    step = _Step(source.faces, target.faces, sample, weights, landmarks)
+    for size in scales:
+        p1, p2 = phi1[:, :size], phi2[:, :size]
+        mapping[sample] = step(p1, p2, _low_pass(p1, m1, x1), _low_pass(p2, m2, x2), mapping, sample)
+    mapping = step(phi1, phi2, x1, x2, mapping, np.arange(n1))
+    return step.pin(mapping)
+
+
+class _Step:
+    """One coarse-to-fine step: deform the source shell, fit C, map ``rows`` in the product space."""
+
+    def __init__(self, faces1: np.ndarray, faces2: np.ndarray, sample: np.ndarray, weights: np.ndarray,
+                 landmarks: np.ndarray | None) -> None:
+        self.faces1, self.faces2, self.sample, self.weights = faces1, faces2, sample, weights
+        self.landmarks = None if landmarks is None or len(landmarks) == 0 else np.asarray(landmarks)
+
+    def pin(self, mapping: np.ndarray) -> np.ndarray:
+        if self.landmarks is not None:
+            mapping[self.landmarks[:, 0]] = self.landmarks[:, 1]
+        return mapping
+
+    def __call__(self, p1: np.ndarray, p2: np.ndarray, shell1: np.ndarray, shell2: np.ndarray,
+                 mapping: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        s = self.sample
+        images = self.pin(mapping.copy())[s]
+        # A rigid motion first (the low-passed displacement of a rotation is not the rotation at
+        # full resolution), then the smooth deformation: the displacement the map still asks for,
+        # projected on the k functions (mass-weighted, estimated on the sample).
+        moved = _rigid(shell1[s], shell2[images], self.weights)(shell1)
+        deformed = moved + p1 @ (p1[s].T @ (self.weights[:, None] * (shell2[images] - moved[s])))
+        U, _, Vt = np.linalg.svd(p1[s].T @ p2[images])  # orthogonal C of Phi1 C ~ Phi2[T] (Procrustes)
+        queries = np.hstack([deformed[rows], NORMAL_WEIGHT * _normals(deformed, self.faces1)[rows],
+                             SPECTRAL_WEIGHT * p1[rows] @ (U @ Vt)])
+        points = np.hstack([shell2, NORMAL_WEIGHT * _normals(shell2, self.faces2), SPECTRAL_WEIGHT * p2])
+        if len(points) > PRUNE_ABOVE:
+            return _nearest_rows_pruned(queries, points)
+        return _nearest_rows(queries, points)
+
+
+def _rigid(points: np.ndarray, onto: np.ndarray, weights: np.ndarray):
+    """The proper rigid motion of least weighted squared distance from ``points`` to ``onto`` (Kabsch).
+
+    Returns the motion as a function of (m, 3) coordinates; a rotation, never a reflection
+    (a mirrored map must not be straightened by it).
+    """
+    mean_p, mean_q = weights @ points, weights @ onto
+    U, _, Vt = np.linalg.svd((points - mean_p).T @ (weights[:, None] * (onto - mean_q)))
+    flip = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt)) or 1.0])
+    rotation = U @ flip @ Vt  # row vectors: x -> x R
+    return lambda x: (x - mean_p) @ rotation + mean_q
+
+
+def _unit_shape(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """Coordinates scaled to unit area and centred on the centroid, and the unit-sum vertex masses."""
+    areas = np.asarray(vertex_areas(mesh), dtype=np.float64)
+    mass = areas / areas.sum()
+    coords = np.asarray(mesh.vertices, dtype=np.float64) / np.sqrt(areas.sum())
+    return coords - mass @ coords, mass
+
+
+def _low_pass(basis: np.ndarray, mass: np.ndarray, coords: np.ndarray) -> np.ndarray:
+    """:math:`\\Phi \\Phi^\\top M X`: the coordinates projected on the basis functions (the shell)."""
+    return basis @ (basis.T @ (mass[:, None] * coords))
+
+
+def _normals(coords: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Area-weighted unit vertex normals of a shell (trimesh)."""
+    return trimesh.Trimesh(coords, faces, process=False).vertex_normals

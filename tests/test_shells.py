@@ -67,3 +67,41 @@ def test_bad_inputs_are_refused(poses):
     cloud = Mesh(bent.vertices, np.zeros((0, 3), dtype=int))
     with pytest.raises(ParameterError, match="point clouds"):
         shell_refine(rest, cloud, np.arange(rest.n_vertices))
+
+
+@pytest.fixture(scope="module")
+def copy_files(tmp_path_factory):
+    """A synthetic creature and its rotated, scaled, re-indexed copy (with the truth), as files."""
+    import trimesh
+
+    folder = tmp_path_factory.mktemp("shells")
+    shape = ds.creature(resolution=2)
+    copy, truth = ds.rigid_copy(shape, scale=1.5, random_state=4)
+    paths = []
+    for name, mesh in (("source", shape), ("target", copy)):
+        paths.append(str(folder / f"{name}.off"))
+        trimesh.Trimesh(mesh.vertices, mesh.faces, process=False).export(paths[-1])
+    return paths, truth
+
+
+def test_match_aligns_shells_by_default_and_keeps_the_permutation(copy_files):
+    import meshcorr
+
+    (source, target), truth = copy_files
+    result = meshcorr.match(source, target)
+    assert "shells" in result.timings and result.params["shells"] is True
+    assert np.mean(result.map == truth) > 0.99
+    plain = meshcorr.match(source, target, shells=False)
+    assert "shells" not in plain.timings and plain.params["shells"] is False
+    assert "shells" not in meshcorr.match(source, target, bijective=True).timings  # one-to-one: ZoomOut's
+
+
+def test_the_command_line_turns_shells_off(copy_files, capsys):
+    import json
+
+    from meshcorr.cli import main
+
+    (source, target), _ = copy_files
+    assert main(["match", source, target, "--no-shells", "--json", "-q"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert "shells" not in summary["timings"]

@@ -9,12 +9,15 @@ forgiven, flipped, partly swapped), and saves the candidate maps themselves
 beside the CSV (``<out>.maps/<set>__<source>__<target>.npz``, one array per
 origin), so that new energies can be studied without running the pairs again. ``--rules`` then replays choice rules on
 the dump without running anything again: which map each rule would keep,
-and its mean error per set.
+and its mean error per set. ``--shells`` refines the default rule's pick (and
+the best candidate) by :mod:`meshcorr.shells` and reports the errors before
+and after, from the same starts.
 
 Usage::
 
     nice -n 10 python benchmarks/selection_study.py --out benchmarks/cache/candidates.csv [--per-set 20]
     python benchmarks/selection_study.py --out benchmarks/cache/candidates.csv --rules
+    python benchmarks/selection_study.py --out benchmarks/cache/candidates.csv --shells
 
 This hooks ``meshcorr.pipeline.score_candidates`` to see the candidate maps
 (a study tool, not an API). Needs ``../shared/data``; exits with a message
@@ -157,14 +160,61 @@ def replay(out: Path) -> str:
     return "\n".join(lines)
 
 
+def shells(out: Path) -> str:
+    """The library rule's pick on each dumped pair, before and after :func:`meshcorr.shells.shell_refine` (Markdown)."""
+    import time
+
+    from meshcorr.shells import shell_refine
+
+    with out.open() as handle:
+        rows = list(csv.DictReader(handle))
+    for r in rows:
+        for key in ("orientation", "distortion", "curvature", "mean_error"):
+            r[key] = float(r[key])
+    pairs: dict = {}
+    for r in rows:
+        pairs.setdefault((r["set"], r["source"], r["target"]), []).append(r)
+    known = {(p.set, p.source_name, p.target_name): p for ps in build_sets(quick=False).values() for p in ps}
+
+    def distances(r):  # the default starts (meshcorr.pipeline.EXTREMITY_STARTS)
+        return not (r["origin"].startswith("extremities") and not r["origin"].endswith("-distances"))
+
+    results: dict = {}
+    for key, candidates in pairs.items():
+        pair = known[key]
+        maps = np.load(out.with_suffix(".maps") / f"{key[0]}__{key[1]}__{key[2]}.npz")
+        source, target = as_mesh(pair.source_path), as_mesh(pair.target_path)
+        for label, pick in (("rule", _choose(candidates, distances, 3)),
+                            ("oracle", min(candidates, key=lambda r: r["mean_error"]))):
+            start = time.perf_counter()
+            mapping = shell_refine(source, target, maps[pick["origin"]])
+            seconds = time.perf_counter() - start  # the first pick's with both bases' eigensolves
+            after = score(pair, target, mapping, GeodesicCache("heat"))
+            results.setdefault((key[0], label), []).append((pick["mean_error"], after["mean_error"],
+                                                            int(pick["flipped"]), after["flipped"], seconds))
+        print(f"{key[0]} {key[1]}->{key[2]} shells done", file=sys.stderr, flush=True)
+    lines = ["| set | start | pairs | before | after shells | flips before / after | median s (the rule's pick: with the bases' eigensolves) |",
+             "|---|---|---|---|---|---|---|"]
+    for (name, label), values in sorted(results.items()):
+        v = np.array(values, dtype=float)
+        lines.append(f"| {name} | {label} | {len(v)} | {v[:, 0].mean():.4f} | {v[:, 1].mean():.4f} | "
+                     f"{int(v[:, 2].sum())} / {int(v[:, 3].sum())} | {np.median(v[:, 4]):.2f} |")
+    return "\n".join(lines)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", type=Path, default=Path("benchmarks/cache/candidates.csv"))
     parser.add_argument("--per-set", type=int, default=20, help="pairs per set, spread evenly")
     parser.add_argument("--rules", action="store_true", help="replay the rules on the dump")
+    parser.add_argument("--shells", action="store_true",
+                        help="refine the default rule's pick and the best candidate by meshcorr.shells")
     args = parser.parse_args(argv)
     if not DATA.is_dir():
         print(f"selection_study: {DATA} is absent; it needs ../shared/data. Skipping.", file=sys.stderr)
+        return 0
+    if args.shells:
+        print(shells(args.out))
         return 0
     if not args.rules:
         args.out.parent.mkdir(parents=True, exist_ok=True)

@@ -26,7 +26,7 @@ from ._threads import parallel_map
 from .anchors import EXACT_PAIRS, anchor_descriptors, embedding_neighbours, proximity_matching, select_anchors
 from .curvature import curvature_disagreement
 from .errors import MeshWarning, ParameterError, PartialShapeWarning
-from .extremities import find_extremities, match_extremities
+from .extremities import match_extremities, spectrum_extremities
 from .icp import tps_icp
 from .landmark_map import check_landmarks, landmark_map
 from .mesh import Mesh, MeshLike
@@ -380,8 +380,8 @@ def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, s
     if pairs is not None:
         starts.append(("landmarks", landmark_map(g1, g2, pairs), {}))
     if extremities:
-        tips = [find_extremities(mesh, spectrum.geodesics_from, length_unit=spectrum.max_geodesic,
-                                 random_state=random_state) for mesh, spectrum in zip((src, tgt), spectra)]
+        tips = [spectrum_extremities(mesh, spectrum, random_state=random_state)
+                for mesh, spectrum in zip((src, tgt), spectra)]
         for rank, (energy, assignment) in enumerate(match_extremities(*tips)):
             for how in EXTREMITY_STARTS if reliable else ("distances",):
                 start = (fit_oriented_map(src, tgt, g1, g2, assignment, basis_k=refine_k,

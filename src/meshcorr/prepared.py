@@ -329,7 +329,7 @@ def warm(mesh: Mesh, spectrum: Spectrum, settings: dict) -> None:
     line here.
     """
     from .curvature import curvature_disagreement
-    from .extremities import find_extremities
+    from .extremities import spectrum_extremities
     from .orientation import orientation_scores
     from .refine import laplace_basis
     from .selection import distortion_sources
@@ -338,7 +338,7 @@ def warm(mesh: Mesh, spectrum: Spectrum, settings: dict) -> None:
     identity = np.arange(mesh.n_vertices)
     orientation_scores(mesh, mesh, identity, random_state=seed)  # sample, neighbourhoods, regions
     curvature_disagreement(mesh, mesh, identity, random_state=seed)
-    find_extremities(mesh, spectrum.geodesics_from, length_unit=spectrum.max_geodesic, random_state=seed)
+    spectrum_extremities(mesh, spectrum, random_state=seed)
     if seed is not None:  # the rows the whole-map choice's distortion reads on the source (meshcorr.selection)
         for i in distortion_sources(mesh.n_vertices, seed):
             spectrum.geodesics_from(int(i))

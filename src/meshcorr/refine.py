@@ -203,17 +203,17 @@ def _single_precision_bound(augmented_queries: np.ndarray, augmented_points: np.
     floating point (any summation order, FMA or not) is within
     :math:`\gamma_n \sum_k |a_k b_k|`, :math:`\gamma_n = nu / (1 - nu)`, of
     the exact one (Higham, "Accuracy and stability of numerical algorithms",
-    2nd ed., section 3.1); :math:`\sum_k |a_k b_k| \le \lVert a \rVert
-    \lVert b \rVert` (Cauchy-Schwarz), taken with the largest point norm.
-    The double-precision search's own :math:`\gamma_n` (with
+    2nd ed., section 3.1). Here :math:`\sum_k |a_k b_k| = 2 \sum_k |q_k||p_k|
+    + |p|^2 \le 2 |q| P + P^2` (Cauchy-Schwarz), :math:`P` the largest point
+    norm. The double-precision search's own :math:`\gamma_n` (with
     :math:`u = 2^{-53}`) is added, so that a screened answer is the one it
     would give; the whole is doubled for the rounding of this bound itself.
     """
     n = augmented_points.shape[0]
     gamma32, gamma64 = (n * u / (1.0 - n * u) for u in (_U32, _U64))
-    largest = float(np.sqrt(np.einsum("ij,ij->j", augmented_points, augmented_points).max()))
-    norms = np.sqrt(np.einsum("ij,ij->i", augmented_queries, augmented_queries))
-    return 2.0 * (gamma32 + 2.0 * _U32 + _U32 ** 2 + gamma64) * norms * largest
+    largest = float(np.sqrt(augmented_points[-1].max()))  # the last row holds |p|^2
+    norms = np.sqrt(np.einsum("ij,ij->i", augmented_queries[:, :-1], augmented_queries[:, :-1]))
+    return 2.0 * (gamma32 + 2.0 * _U32 + _U32 ** 2 + gamma64) * (2.0 * norms * largest + largest ** 2)
 
 
 def _nearest_rows_double(queries: np.ndarray, points: np.ndarray) -> np.ndarray:

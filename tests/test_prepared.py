@@ -162,7 +162,7 @@ def test_prepared_shape_carries_the_per_pair_quantities_through_its_file(pair, t
         kinds = {key[0] for key in shape.mesh._cache}
         assert {"curvature_table", "orientation_regions"} <= kinds
         assert set(map(int, distortion_sources(shape.n_vertices, 0))) <= set(shape.spectrum.rows)
-        assert ("extremities", 0) in shape.spectrum.memo
+        assert ("extremities", 0) in shape.spectrum.memo and "spread" in shape.spectrum.memo
     direct = meshcorr.match(*pair, mode="scalable")
     for name, shape in zip("ab", shapes):
         shape.save(tmp_path / f"{name}.npz")

@@ -250,7 +250,7 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
                           "image of the right one; compare it with result.alternative_map.", MeshWarning,
                           stacklevel=2)
         with timer.stage("matching"):
-            spread = mean_pairwise_distance(X) if anchor_scale == "embedding" and n_anchors > 0 else 1.0
+            spread = embedding_spread(spectra[0]) if anchor_scale == "embedding" and n_anchors > 0 else 1.0
             for candidate in (chosen, other):
                 if candidate is not None:
                     _finish(candidate, X, spectra, spread, **options)
@@ -305,6 +305,18 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         candidates=summaries, alternative_map=alternative_map, orientation_reliable=reliable,
         refine_history=refine_history, map_candidates=map_candidates,
     )
+
+
+def embedding_spread(spectrum) -> float:
+    """:func:`meshcorr.tps.mean_pairwise_distance` of a spectrum's embedding, computed once per spectrum.
+
+    The anchors' length scale of :func:`_finish` depends on the source shape
+    only (a seeded sample of its embedding), so a prepared shape matched many
+    times measures it once (kept in ``spectrum.memo``; the same value).
+    """
+    if "spread" not in spectrum.memo:
+        spectrum.memo["spread"] = mean_pairwise_distance(spectrum.embedding)
+    return spectrum.memo["spread"]
 
 
 def _match_partial(shapes, pairs: np.ndarray | None, partial: str, spectral_options: dict, *, extremities: bool,

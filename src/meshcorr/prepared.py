@@ -331,6 +331,7 @@ def warm(mesh: Mesh, spectrum: Spectrum, settings: dict) -> None:
     from .curvature import curvature_disagreement
     from .extremities import spectrum_extremities
     from .orientation import orientation_scores
+    from .pipeline import embedding_spread
     from .refine import laplace_basis
     from .selection import distortion_sources
 
@@ -339,6 +340,7 @@ def warm(mesh: Mesh, spectrum: Spectrum, settings: dict) -> None:
     orientation_scores(mesh, mesh, identity, random_state=seed)  # sample, neighbourhoods, regions
     curvature_disagreement(mesh, mesh, identity, random_state=seed)
     spectrum_extremities(mesh, spectrum, random_state=seed)
+    embedding_spread(spectrum)
     if seed is not None:  # the rows the whole-map choice's distortion reads on the source (meshcorr.selection)
         for i in distortion_sources(mesh.n_vertices, seed):
             spectrum.geodesics_from(int(i))

@@ -40,7 +40,11 @@ algorithm for computing k-nearest neighbors", IEEE Trans. Computers 1975):
 the same map, ~15x less work on spectral coordinates. A KD-tree is slower
 than brute force in 40 dimensions, and a greedy descent over the target's
 one-ring from a coarse winner stops in local minima for about half the
-vertices (both measured, ``benchmarks/RESULTS-refine.md``). ARPACK runs
+vertices (both measured, ``benchmarks/RESULTS-refine.md``). Every
+brute-force search of more than :data:`SCREEN_ABOVE` pairs is first done in
+single precision with a rigorous error bound, and only its near-ties again
+in double precision (:func:`_nearest_rows`): the double-precision map, ~25 %
+less time at 5k x 5k x 40 (``benchmarks/RESULTS-collections.md``). ARPACK runs
 with single-threaded BLAS: its work outside the sparse solves is
 memory-bound, and threads only add waits on a shared 2-core machine.
 The bases depend on the meshes only: :func:`meshcorr.pipeline.match`

@@ -93,3 +93,23 @@ def test_a_boundary_does_not_bend_the_curvature_next_to_it():
     assert len(rim) > 50
     interior = smoothed_curvature(part, np.flatnonzero(part.vertices[:, 2] < -0.5), 0.045)
     np.testing.assert_allclose(smoothed_curvature(part, rim, 0.045), np.median(interior), rtol=0.02)
+
+
+def test_mapped_curvature_is_smoothed_curvature_bit_for_bit_from_a_cached_table(monkeypatch):
+    from meshcorr import curvature
+    from meshcorr.curvature import mapped_curvature, smoothed_curvature
+
+    shape = ds.creature(resolution=1)
+    mesh = Mesh(shape.vertices, shape.faces)
+    vertices = np.random.default_rng(0).integers(0, mesh.n_vertices, size=300)
+    for signed in (True, False):
+        np.testing.assert_array_equal(mapped_curvature(mesh, vertices, 0.045, signed=signed),
+                                      smoothed_curvature(mesh, vertices, 0.045, signed=signed))
+    table = mesh._cache[("curvature_table", 0.045)]
+    assert table.shape == (mesh.n_vertices,) and not table.flags.writeable
+    assert ("curvature_table", 0.045, "unsigned") in mesh._cache
+    # Above the size limit: no table, the same values.
+    other = Mesh(shape.vertices, shape.faces)
+    monkeypatch.setattr(curvature, "CURVATURE_TABLE_MAX", 10)
+    np.testing.assert_array_equal(mapped_curvature(other, vertices, 0.045), smoothed_curvature(other, vertices, 0.045))
+    assert not any(key[0] == "curvature_table" for key in other._cache)

@@ -75,3 +75,22 @@ def test_shared_neighbours_give_the_same_anchors_and_map():
     dist, expected = cKDTree(Y).query(X)
     np.testing.assert_array_equal(mapping, expected)
     np.testing.assert_allclose(cost, dist, rtol=1e-12)
+
+
+def test_orientation_scores_equal_the_two_scores_and_cache_the_regions(creature_pair):
+    from meshcorr.orientation import orientation_scores, regional_orientation
+
+    (V1, F1), (V2, F2) = creature_pair
+    source, target = Mesh(V1, F1), Mesh(V2, F2)
+    rng = np.random.default_rng(0)
+    for mapping in (np.arange(len(V1)), rng.integers(0, len(V2), size=len(V1))):
+        score, regional = orientation_scores(source, target, mapping, random_state=3)
+        assert score == orientation_score(Mesh(V1, F1), Mesh(V2, F2), mapping, random_state=3)
+        np.testing.assert_array_equal(regional, regional_orientation(Mesh(V1, F1), Mesh(V2, F2), mapping,
+                                                                     random_state=3))
+    assert any(key[0] == "orientation_regions" for key in source._cache)
+    with pytest.raises(Exception, match="one entry per source vertex"):
+        orientation_scores(source, target, np.arange(3))
+    unseeded = Mesh(V1, F1)
+    orientation_scores(unseeded, unseeded, np.arange(len(V1)), random_state=None)
+    assert not any(key[0] == "orientation_regions" for key in unseeded._cache)

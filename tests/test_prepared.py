@@ -149,3 +149,33 @@ def test_prepared_shapes_with_user_landmarks_give_the_same_map(pair):
                                   meshcorr.match(*pair, landmarks=landmarks).map)
     np.testing.assert_array_equal(meshcorr.match(*shapes, extremities=False).map,
                                   meshcorr.match(*pair, extremities=False).map)
+
+
+def test_prepared_shape_carries_the_per_pair_quantities_through_its_file(pair, tmp_path):
+    """What prepare computes for the pairs (curvature table, orientation regions, the distortion's source
+    rows, the extremities) is there after save/load, and the loaded shape gives the same map."""
+    from meshcorr.extremities import spectrum_extremities
+    from meshcorr.selection import distortion_sources
+
+    shapes = [prepare(mesh, mode="scalable") for mesh in pair]
+    for shape in shapes:
+        kinds = {key[0] for key in shape.mesh._cache}
+        assert {"curvature_table", "orientation_regions"} <= kinds
+        assert set(map(int, distortion_sources(shape.n_vertices, 0))) <= set(shape.spectrum.rows)
+        assert ("extremities", 0) in shape.spectrum.memo and "spread" in shape.spectrum.memo
+    direct = meshcorr.match(*pair, mode="scalable")
+    for name, shape in zip("ab", shapes):
+        shape.save(tmp_path / f"{name}.npz")
+    loaded = [PreparedShape.load(tmp_path / f"{name}.npz", mesh=mesh) for name, mesh in zip("ab", pair)]
+    for shape, original in zip(loaded, shapes):
+        key = ("curvature_table", 0.045)
+        np.testing.assert_array_equal(shape.mesh._cache[key], original.mesh._cache[key])
+        assert set(original.spectrum.rows) <= set(shape.spectrum.rows)
+        assert not shape.spectrum.memo  # recomputed on demand: the same tips
+        tips, before = spectrum_extremities(shape.mesh, shape.spectrum), original.spectrum.memo[("extremities", 0)]
+        np.testing.assert_array_equal(tips.vertices, before.vertices)
+        np.testing.assert_array_equal(tips.distances, before.distances)
+    np.testing.assert_array_equal(meshcorr.match(*loaded, mode="scalable").map, direct.map)
+    # A stale file (made for the other mesh) is still refused before any of it is used.
+    with pytest.raises(PreparedShapeError, match="another mesh"):
+        PreparedShape.load(tmp_path / "a.npz", mesh=pair[1])

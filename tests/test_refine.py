@@ -321,3 +321,39 @@ def test_ctrl_c_while_waiting_for_the_bases_cancels_the_worker_and_exits_cleanly
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == "interrupted True"
     assert out.stderr == ""
+
+
+def test_single_precision_screen_gives_the_double_precision_answer(poses, monkeypatch):
+    import meshcorr.refine as refine_module
+    from meshcorr.refine import _nearest_rows, _nearest_rows_double, _single_precision_bound
+
+    screened = []
+    original = refine_module._single_precision_bound
+    monkeypatch.setattr(refine_module, "SCREEN_ABOVE", 1000)  # these small sets take the screened path
+    monkeypatch.setattr(refine_module, "_single_precision_bound", lambda *a: screened.append(1) or original(*a))
+
+    rest, bent = poses
+    _, phi1 = laplace_basis(rest, 20)
+    _, phi2 = laplace_basis(bent, 20)
+    queries = phi1 + np.random.default_rng(0).normal(0.0, 0.05, phi1.shape)
+    np.testing.assert_array_equal(_nearest_rows(queries, phi2), _nearest_rows_double(queries, phi2))
+    assert screened
+    # Near-ties the single precision cannot resolve: duplicated points (the first index wins, as in
+    # double precision) and queries halfway between two points, off by far less than float32's roundoff.
+    rng = np.random.default_rng(1)
+    points = rng.normal(size=(1500, 30))
+    points = np.vstack([points, points[:200]])
+    halfway = 0.5 * (points[:700] + points[700:1400])
+    queries = np.vstack([points[:500] + 1e-3, halfway + 1e-12 * rng.normal(size=halfway.shape)])
+    expected = _nearest_rows_double(queries, points)
+    assert (expected < 1500).all()
+    np.testing.assert_array_equal(_nearest_rows(queries, points), expected)
+    # The bound holds the float32 error with room: at most half of it on these points.
+    augmented_q = np.hstack([queries, np.ones((len(queries), 1))])
+    augmented_p = np.vstack([-2.0 * points.T, (points ** 2).sum(axis=1)[None, :]])
+    error = np.abs(augmented_q.astype(np.float32) @ augmented_p.astype(np.float32) - augmented_q @ augmented_p)
+    assert (error.max(axis=1) <= 0.5 * _single_precision_bound(augmented_q, augmented_p)).all()
+    # Non-finite input: the double-precision search answers (NaN rows are never nearest).
+    bad = queries[:50].copy()
+    bad[0, 0] = np.nan
+    np.testing.assert_array_equal(_nearest_rows(bad, points), _nearest_rows_double(bad, points))

@@ -135,6 +135,36 @@ def find_extremities(mesh: Mesh, geodesics_from: RowFn, *, length_unit: float = 
     return Extremities(np.array(chosen, dtype=np.int64), np.array(rows))
 
 
+def spectrum_extremities(mesh: Mesh, spectrum, *, random_state: int | None = 0) -> Extremities:
+    """:func:`find_extremities` of a mesh with its spectrum's geodesics, computed once per spectrum.
+
+    Parameters
+    ----------
+    mesh : Mesh
+    spectrum : Spectrum
+        Of ``mesh``; its ``geodesics_from`` and ``max_geodesic`` (the length unit).
+    random_state : int or None
+
+    Returns
+    -------
+    extremities : Extremities
+        The same as ``find_extremities(mesh, spectrum.geodesics_from,
+        length_unit=spectrum.max_geodesic, random_state=random_state)``: it
+        depends on the shape only, so a prepared shape matched many times
+        finds its tips once (kept in ``spectrum.memo``; read-only arrays).
+    """
+    if not isinstance(random_state, (int, np.integer)):  # an unseeded sample is drawn anew each time
+        return find_extremities(mesh, spectrum.geodesics_from, length_unit=spectrum.max_geodesic,
+                                random_state=random_state)
+    key = ("extremities", int(random_state))
+    if key not in spectrum.memo:
+        tips = find_extremities(mesh, spectrum.geodesics_from, length_unit=spectrum.max_geodesic,
+                                random_state=random_state)
+        tips.vertices.flags.writeable = tips.distances.flags.writeable = False
+        spectrum.memo[key] = tips
+    return spectrum.memo[key]
+
+
 def match_extremities(source: Extremities, target: Extremities, *, n_best: int = 4
                       ) -> list[tuple[float, np.ndarray]]:
     """The ``n_best`` injective extremity assignments of least distance distortion.

@@ -328,6 +328,13 @@ def orientation_score(source: Mesh, target: Mesh, mapping: np.ndarray, *, n_neig
         keeps its orientation (module docstring); 0.5 when every tested
         neighbourhood collapses onto a single target vertex.
     """
+    n_neighbors, n_sample, mapping = _checked(source, target, mapping, n_neighbors, n_sample)
+    _, triple, areas = _orientation_signs(source, target, mapping, n_neighbors, n_sample, random_state)
+    return _score(triple, areas)
+
+
+def _checked(source: Mesh, target: Mesh, mapping, n_neighbors, n_sample) -> tuple[int, int, np.ndarray]:
+    """The checked ``n_neighbors``, ``n_sample`` and map of :func:`orientation_score`."""
     n_neighbors = check_int("n_neighbors", n_neighbors, minimum=2)
     n_sample = check_int("n_sample", n_sample, minimum=1)
     mapping = np.asarray(mapping)
@@ -337,7 +344,11 @@ def orientation_score(source: Mesh, target: Mesh, mapping: np.ndarray, *, n_neig
     if mapping.size and (mapping.min() < 0 or mapping.max() >= target.n_vertices):
         raise ParameterError(f"The map must hold target vertex indices in [0, {target.n_vertices}). "
                              f"Got values in [{mapping.min()}, {mapping.max()}] instead.")
-    _, triple, areas = _orientation_signs(source, target, mapping, n_neighbors, n_sample, random_state)
+    return n_neighbors, n_sample, mapping
+
+
+def _score(triple: np.ndarray, areas: np.ndarray) -> float:
+    """:func:`orientation_score` from the triple products of :func:`_orientation_signs`."""
     w = areas * (triple != 0)
     if w.sum() == 0:
         return 0.5
@@ -385,13 +396,62 @@ def regional_orientation(source: Mesh, target: Mesh, mapping: np.ndarray, *, n_r
         order of the seeds.
     """
     n_regions = check_int("n_regions", n_regions, minimum=1)
-    sample, triple, areas = _orientation_signs(source, target, np.asarray(mapping), n_neighbors, n_sample,
-                                               random_state)
+    _, triple, areas = _orientation_signs(source, target, np.asarray(mapping), n_neighbors, n_sample, random_state)
+    return _regional_scores(source, triple, areas, n_regions, n_neighbors, n_sample, random_state)
+
+
+def orientation_scores(source: Mesh, target: Mesh, mapping: np.ndarray, *, n_regions: int = 12,
+                       n_neighbors: int = 16, n_sample: int = 2000, random_state: int | None = 0
+                       ) -> tuple[float, np.ndarray]:
+    """:func:`orientation_score` and :func:`regional_orientation` of one map, its frames mapped once.
+
+    Parameters
+    ----------
+    source, target : Mesh
+    mapping : (n1,) int
+    n_regions, n_neighbors, n_sample, random_state
+        As :func:`regional_orientation`.
+
+    Returns
+    -------
+    score : float
+        ``orientation_score(source, target, mapping, ...)``, the same value.
+    regional : (r,) float
+        ``regional_orientation(source, target, mapping, ...)``, the same values.
+    """
+    n_neighbors, n_sample, mapping = _checked(source, target, mapping, n_neighbors, n_sample)
+    n_regions = check_int("n_regions", n_regions, minimum=1)
+    _, triple, areas = _orientation_signs(source, target, mapping, n_neighbors, n_sample, random_state)
+    return _score(triple, areas), _regional_scores(source, triple, areas, n_regions, n_neighbors, n_sample,
+                                                   random_state)
+
+
+def _regions(source: Mesh, n_regions: int, n_neighbors: int, n_sample: int, random_state) -> tuple[np.ndarray, int]:
+    """The region of each sampled vertex of :func:`_neighbourhoods` ``(s,)`` and the region count.
+
+    Depends on the source only: cached on it for a seeded sample, like :func:`_neighbourhoods`.
+    """
+    seeded = isinstance(random_state, (int, np.integer))
+    key = ("orientation_regions", n_regions, n_neighbors, n_sample, int(random_state) if seeded else None)
+    if seeded and key in source._cache:
+        return source._cache[key]
+    sample = _neighbourhoods(source, n_neighbors, n_sample, random_state)[0]
     points = source.vertices[sample]
     seeds = farthest_point_sampling(lambda i: np.linalg.norm(points - points[i], axis=1), len(points),
                                     min(n_regions, len(points)), start=0).indices
     region = cKDTree(points[seeds]).query(points)[1]
+    region.flags.writeable = False
+    parts = (region, int(len(seeds)))
+    if seeded:
+        source._cache[key] = parts
+    return parts
+
+
+def _regional_scores(source: Mesh, triple: np.ndarray, areas: np.ndarray, n_regions: int, n_neighbors: int,
+                     n_sample: int, random_state) -> np.ndarray:
+    """:func:`regional_orientation` from the triple products of :func:`_orientation_signs`."""
+    region, n_seeds = _regions(source, n_regions, n_neighbors, n_sample, random_state)
     w = areas * (triple != 0)
-    kept = np.bincount(region, weights=w * (triple > 0), minlength=len(seeds))
-    total = np.bincount(region, weights=w, minlength=len(seeds))
+    kept = np.bincount(region, weights=w * (triple > 0), minlength=n_seeds)
+    total = np.bincount(region, weights=w, minlength=n_seeds)
     return np.where(total > 0, kept / np.maximum(total, 1e-300), 0.5)

@@ -26,7 +26,7 @@ from ._threads import parallel_map
 from .anchors import EXACT_PAIRS, anchor_descriptors, embedding_neighbours, proximity_matching, select_anchors
 from .curvature import curvature_disagreement
 from .errors import MeshWarning, ParameterError, PartialShapeWarning
-from .extremities import find_extremities, match_extremities
+from .extremities import match_extremities, spectrum_extremities
 from .icp import tps_icp
 from .landmark_map import check_landmarks, landmark_map
 from .mesh import Mesh, MeshLike
@@ -259,7 +259,7 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
                           "image of the right one; compare it with result.alternative_map.", MeshWarning,
                           stacklevel=2)
         with timer.stage("matching"):
-            spread = mean_pairwise_distance(X) if anchor_scale == "embedding" and n_anchors > 0 else 1.0
+            spread = embedding_spread(spectra[0]) if anchor_scale == "embedding" and n_anchors > 0 else 1.0
             for candidate in (chosen, other):
                 if candidate is not None:
                     _finish(candidate, X, spectra, spread, **options)
@@ -318,6 +318,18 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         candidates=summaries, alternative_map=alternative_map, orientation_reliable=reliable,
         refine_history=refine_history, map_candidates=map_candidates,
     )
+
+
+def embedding_spread(spectrum) -> float:
+    """:func:`meshcorr.tps.mean_pairwise_distance` of a spectrum's embedding, computed once per spectrum.
+
+    The anchors' length scale of :func:`_finish` depends on the source shape
+    only (a seeded sample of its embedding), so a prepared shape matched many
+    times measures it once (kept in ``spectrum.memo``; the same value).
+    """
+    if "spread" not in spectrum.memo:
+        spectrum.memo["spread"] = mean_pairwise_distance(spectrum.embedding)
+    return spectrum.memo["spread"]
 
 
 def _match_partial(shapes, pairs: np.ndarray | None, partial: str, spectral_options: dict, *, extremities: bool,
@@ -393,8 +405,8 @@ def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, s
     if pairs is not None:
         starts.append(("landmarks", landmark_map(g1, g2, pairs), {}))
     if extremities:
-        tips = [find_extremities(mesh, spectrum.geodesics_from, length_unit=spectrum.max_geodesic,
-                                 random_state=random_state) for mesh, spectrum in zip((src, tgt), spectra)]
+        tips = [spectrum_extremities(mesh, spectrum, random_state=random_state)
+                for mesh, spectrum in zip((src, tgt), spectra)]
         for rank, (energy, assignment) in enumerate(match_extremities(*tips)):
             for how in EXTREMITY_STARTS if reliable else ("distances",):
                 start = (fit_oriented_map(src, tgt, g1, g2, assignment, basis_k=refine_k,

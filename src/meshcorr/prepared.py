@@ -320,20 +320,30 @@ def warm(mesh: Mesh, spectrum: Spectrum, settings: dict) -> None:
 
     The orientation and curvature scores of a map onto the mesh itself fill
     exactly the cache entries that scoring a pair's candidates reads, in
-    both roles (source and target), with the pipeline's own parameters; the
-    extremities (:mod:`meshcorr.extremities`) leave the geodesic rows they
-    need in ``spectrum.rows``. A new per-shape quantity is one more line here.
+    both roles (source and target), with the pipeline's own parameters
+    (the orientation sample, its neighbourhoods and regions, the curvature
+    table of :func:`meshcorr.curvature.mapped_curvature`); the extremities
+    (:mod:`meshcorr.extremities`) and the seeded sources of the metric
+    distortion (:func:`meshcorr.selection.distortion_sources`) leave their
+    geodesic rows in ``spectrum.rows``. A new per-shape quantity is one more
+    line here.
     """
     from .curvature import curvature_disagreement
-    from .extremities import find_extremities
-    from .orientation import orientation_score
+    from .extremities import spectrum_extremities
+    from .orientation import orientation_scores
+    from .pipeline import embedding_spread
     from .refine import laplace_basis
+    from .selection import distortion_sources
 
     seed = settings["random_state"]
     identity = np.arange(mesh.n_vertices)
-    orientation_score(mesh, mesh, identity, random_state=seed)
+    orientation_scores(mesh, mesh, identity, random_state=seed)  # sample, neighbourhoods, regions
     curvature_disagreement(mesh, mesh, identity, random_state=seed)
-    find_extremities(mesh, spectrum.geodesics_from, length_unit=spectrum.max_geodesic, random_state=seed)
+    spectrum_extremities(mesh, spectrum, random_state=seed)
+    embedding_spread(spectrum)
+    if seed is not None:  # the rows the whole-map choice's distortion reads on the source (meshcorr.selection)
+        for i in distortion_sources(mesh.n_vertices, seed):
+            spectrum.geodesics_from(int(i))
     if settings["refine"]:
         laplace_basis(mesh, min(settings["refine_k"], mesh.n_vertices - 1), random_state=seed)
 

@@ -40,7 +40,11 @@ algorithm for computing k-nearest neighbors", IEEE Trans. Computers 1975):
 the same map, ~15x less work on spectral coordinates. A KD-tree is slower
 than brute force in 40 dimensions, and a greedy descent over the target's
 one-ring from a coarse winner stops in local minima for about half the
-vertices (both measured, ``benchmarks/RESULTS-refine.md``). ARPACK runs
+vertices (both measured, ``benchmarks/RESULTS-refine.md``). Every
+brute-force search of more than :data:`SCREEN_ABOVE` pairs is first done in
+single precision with a rigorous error bound, and only its near-ties again
+in double precision (:func:`_nearest_rows`): the double-precision map, ~25 %
+less time at 5k x 5k x 40 (``benchmarks/RESULTS-collections.md``). ARPACK runs
 with single-threaded BLAS: its work outside the sparse solves is
 memory-bound, and threads only add waits on a shared 2-core machine.
 The bases depend on the meshes only: :func:`meshcorr.pipeline.match`
@@ -139,21 +143,92 @@ def _laplace_basis(mesh: Mesh, k: int, random_state: int | None,
 
 #: Squared distances per block of :func:`_nearest_rows` (8 MB of float64).
 _NEAREST_BLOCK = 1 << 20
+#: Single-precision squared distances per block of the screen of :func:`_nearest_rows` (2 MB: blocks of
+#: 2^18-2^21 entries took 0.066, 0.056, 0.060 and 0.076 s at 5k x 5k x 40 on one core).
+_SCREEN_BLOCK = 1 << 19
+#: Fewest ``len(queries) * len(points)`` for which :func:`_nearest_rows` screens in single precision
+#: first (below it the screen's second pass costs more than it saves).
+SCREEN_ABOVE = 1 << 20
+#: Unit roundoff of float32 and float64.
+_U32, _U64 = 2.0 ** -24, 2.0 ** -53
 
 
 def _nearest_rows(queries: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Index of the nearest row of ``points`` for each row of ``queries``.
+    """Index of the nearest row of ``points`` for each row of ``queries``: the double-precision answer.
 
     Brute force in row blocks (BLAS), faster than a KD-tree in the 20-60
-    dimensions of a spectral basis. In double precision: single precision
-    halves the time of the products (measured at 5k x 5k x 40), but near-ties
-    (relative difference ~1e-6) then resolve differently with another number
-    of BLAS threads, and the same inputs must give the same map.
+    dimensions of a spectral basis (``benchmarks/RESULTS-refine.md``). The
+    answer is that of the double-precision search
+    (:func:`_nearest_rows_double`), whose near-ties do not depend on the
+    number of BLAS threads; single precision alone is 2x faster but was
+    measured to resolve a near-tie differently with 1 and 2 threads. Above
+    :data:`SCREEN_ABOVE` pairs the squared distances are first computed in
+    single precision, with a rigorous bound on their error
+    (:func:`_single_precision_bound`): a query whose best point beats the
+    runner-up by more than twice the bound (plus the double-precision
+    search's own bound) has that best point as its double-precision answer,
+    provably; every other query (a near-tie, a few percent of them) is
+    searched again in double precision. Same map as the double-precision
+    search, with any number of threads.
     """
+    queries, points = np.asarray(queries, dtype=np.float64), np.asarray(points, dtype=np.float64)
+    if len(queries) * len(points) <= SCREEN_ABOVE or not (np.isfinite(queries).all() and np.isfinite(points).all()):
+        return _nearest_rows_double(queries, points)
+    augmented_points = _augmented_points(points)
+    augmented_queries = np.hstack([queries, np.ones((len(queries), 1))])
+    bound = _single_precision_bound(augmented_queries, augmented_points)
+    points32 = augmented_points.astype(np.float32)
+    queries32 = augmented_queries.astype(np.float32)
+    out = np.empty(len(queries), dtype=np.int64)
+    unsure = np.zeros(len(queries), dtype=bool)
+    step = max(1, min(len(queries), _SCREEN_BLOCK // max(1, len(points))))
+    buffer = np.empty((step, len(points)), dtype=np.float32)
+    for start in range(0, len(queries), step):
+        block = np.matmul(queries32[start:start + step], points32, out=buffer[:min(step, len(queries) - start)])
+        rows = np.arange(len(block))
+        best = np.argmin(block, axis=1)
+        best_value = block[rows, best].astype(np.float64)
+        block[rows, best] = np.inf
+        runner_up = block.min(axis=1).astype(np.float64)
+        out[start:start + len(block)] = best
+        unsure[start:start + len(block)] = runner_up - best_value <= 2.0 * bound[start:start + len(block)]
+    if unsure.any():
+        out[unsure] = _nearest_rows_double(queries[unsure], points)
+    return out
+
+
+def _augmented_points(points: np.ndarray) -> np.ndarray:
+    """``(K + 1, n)``: the columns ``[-2 p, |p|^2]``, so that ``[q, 1] . column = |q - p|^2 - |q|^2``."""
+    return np.vstack([-2.0 * points.T, np.einsum("ij,ij->i", points, points)[None, :]])
+
+
+def _single_precision_bound(augmented_queries: np.ndarray, augmented_points: np.ndarray) -> np.ndarray:
+    r"""``(n1,)``: a bound on the error of each single-precision ``[q, 1] . [-2 p, |p|^2]``, plus the double one.
+
+    Rounding the inputs to float32 changes each product term by at most
+    :math:`(2u + u^2)|a_k b_k|`, and a dot product of :math:`n` terms in
+    floating point (any summation order, FMA or not) is within
+    :math:`\gamma_n \sum_k |a_k b_k|`, :math:`\gamma_n = nu / (1 - nu)`, of
+    the exact one (Higham, "Accuracy and stability of numerical algorithms",
+    2nd ed., section 3.1). Here :math:`\sum_k |a_k b_k| = 2 \sum_k |q_k||p_k|
+    + |p|^2 \le 2 |q| P + P^2` (Cauchy-Schwarz), :math:`P` the largest point
+    norm. The double-precision search's own :math:`\gamma_n` (with
+    :math:`u = 2^{-53}`) is added, so that a screened answer is the one it
+    would give; the whole is doubled for the rounding of this bound itself.
+    """
+    n = augmented_points.shape[0]
+    gamma32, gamma64 = (n * u / (1.0 - n * u) for u in (_U32, _U64))
+    largest = float(np.sqrt(augmented_points[-1].max()))  # the last row holds |p|^2
+    norms = np.sqrt(np.einsum("ij,ij->i", augmented_queries[:, :-1], augmented_queries[:, :-1]))
+    return 2.0 * (gamma32 + 2.0 * _U32 + _U32 ** 2 + gamma64) * (2.0 * norms * largest + largest ** 2)
+
+
+def _nearest_rows_double(queries: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """:func:`_nearest_rows` in double precision only (the reference answer)."""
     queries, points = np.asarray(queries, dtype=np.float64), np.asarray(points, dtype=np.float64)
     # |q - p|^2 - |q|^2 = [q, 1] . [-2 p, |p|^2]: one product per block, no separate pass adding |p|^2
     # (25 % faster at 5k x 5k x 40).
-    augmented_points = np.vstack([-2.0 * points.T, np.einsum("ij,ij->i", points, points)[None, :]])
+    augmented_points = _augmented_points(points)
     augmented_queries = np.hstack([queries, np.ones((len(queries), 1))])
     out = np.empty(len(queries), dtype=np.int64)
     step = max(1, min(len(queries), _NEAREST_BLOCK // max(1, len(points))))

@@ -56,7 +56,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .curvature import curvature_disagreement
-from .orientation import orientation_score, regional_orientation
+from .orientation import orientation_scores
 from .symmetry import _rounded, metric_distortion
 
 #: Maps of orientation score below this are set aside when one above exists.
@@ -126,9 +126,7 @@ def score_candidates(candidates: list[MapCandidate], source, target, source_geod
     random_state : int or None
         Seed of the distortion's source vertices and the orientation sample.
     """
-    rng = np.random.default_rng(random_state)
-    n1 = source.n_vertices
-    sources = rng.choice(n1, size=min(N_DISTORTION_SOURCES, n1), replace=False)
+    sources = distortion_sources(source.n_vertices, random_state)
     rows: dict = {}
     for candidate in candidates:
         mapping = candidate.mapping
@@ -139,6 +137,25 @@ def score_candidates(candidates: list[MapCandidate], source, target, source_geod
             errors = np.array([target_geodesics(int(b))[mapping[a]] for a, b in landmarks])
             candidate.landmark_error = float(errors.mean())
             candidate.landmarks_kept = float(np.mean(errors <= LANDMARK_RADIUS))
+
+
+def distortion_sources(n_vertices: int, random_state: int | None = 0) -> np.ndarray:
+    """The seeded source vertices of the metric distortion in :func:`score_candidates`.
+
+    Parameters
+    ----------
+    n_vertices : int
+        Vertices of the source.
+    random_state : int or None
+
+    Returns
+    -------
+    sources : (min(N_DISTORTION_SOURCES, n_vertices),) int
+        They depend on the vertex count and the seed only, so
+        :func:`meshcorr.prepared.prepare` computes their geodesic rows once per shape.
+    """
+    rng = np.random.default_rng(random_state)
+    return rng.choice(n_vertices, size=min(N_DISTORTION_SOURCES, n_vertices), replace=False)
 
 
 def score_orientation(candidate: MapCandidate, source, target, *, random_state: int | None = 0) -> None:
@@ -153,10 +170,10 @@ def score_orientation(candidate: MapCandidate, source, target, *, random_state: 
         Seed of the samples.
     """
     mapping = candidate.mapping
-    candidate.orientation = orientation_score(source, target, mapping, random_state=random_state)
+    orientation, regional = orientation_scores(source, target, mapping, random_state=random_state)
+    candidate.orientation = orientation
     candidate.curvature = curvature_disagreement(source, target, mapping, random_state=random_state)
-    candidate.regional_orientation = float(
-        regional_orientation(source, target, mapping, random_state=random_state).min())
+    candidate.regional_orientation = float(regional.min())
 
 
 def choose_map(candidates: list[MapCandidate], *, reliable: bool

@@ -40,6 +40,10 @@ class Spectrum:
         Scalable mode: the unnormalised geodesic rows computed so far
         (vertex -> ``(n,)``), which ``geodesics_from`` serves; empty in the
         dense mode, whose rows are those of ``mesh.geodesic_matrix``.
+    memo : dict
+        Values derived from this spectrum alone, kept in memory while it lives
+        (e.g. :func:`meshcorr.extremities.spectrum_extremities`); not saved
+        with a prepared shape, recomputed after loading.
     """
 
     eigenvalues: np.ndarray
@@ -48,6 +52,7 @@ class Spectrum:
     max_geodesic: float
     mode: str = "dense"
     rows: dict = field(default_factory=dict)
+    memo: dict = field(default_factory=dict, repr=False, compare=False)
 
 
 def dense_spectrum(mesh: Mesh, *, k: int, geodesic: str, scale: bool, random_state: int | None,

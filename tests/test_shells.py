@@ -105,3 +105,12 @@ def test_the_command_line_turns_shells_off(copy_files, capsys):
     assert main(["match", source, target, "--no-shells", "--json", "-q"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert "shells" not in summary["timings"]
+
+
+def test_a_mirrored_map_stays_mirrored(poses):
+    # The stage refines the map it is given: against the mirror image (faces rewound so that it
+    # faces outwards), the identity map (a reflection) is kept, not turned into a rotation.
+    rest = poses[0]
+    mirror = Mesh(rest.vertices * [-1.0, 1.0, 1.0], rest.faces[:, ::-1])
+    identity = np.arange(rest.n_vertices)
+    assert np.mean(shell_refine(rest, mirror, identity, k=30) == identity) > 0.99

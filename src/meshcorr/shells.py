@@ -20,9 +20,12 @@ shape's *shell* at scale :math:`k` is its coordinates low-passed to the first
 (coordinates scaled to unit area and centred; :math:`\\Phi_i^\\top M_i \\Phi_i = I`).
 For :math:`k = k_0 < \\dots < K`, given the current map :math:`T`:
 
-- **rigid motion**: the proper rotation and translation that best move the
+- **rigid motion**: the orthogonal motion and translation that best move the
   source shell onto the target shell's images (Kabsch, weighted by vertex
-  area): the shapes may come in any position;
+  area): the shapes may come in any position. It is a rotation for a map
+  that keeps the orientation and a reflection for a mirrored one (whose
+  deformed normals are then turned): the stage refines the map it is
+  given, it does not choose between mirror images;
 - **deformation**: the displacement the map still asks of the source shell,
   low-passed to the same :math:`k` functions (the least-squares smooth
   deformation in the span of :math:`\\Phi_1^{(k)}`),
@@ -148,10 +151,11 @@ class _Step:
         # A rigid motion first (the low-passed displacement of a rotation is not the rotation at
         # full resolution), then the smooth deformation: the displacement the map still asks for,
         # projected on the k functions (mass-weighted, estimated on the sample).
-        moved = _rigid(shell1[s], shell2[images], self.weights)(shell1)
+        motion, side = _rigid(shell1[s], shell2[images], self.weights)
+        moved = motion(shell1)
         deformed = moved + p1 @ (p1[s].T @ (self.weights[:, None] * (shell2[images] - moved[s])))
         U, _, Vt = np.linalg.svd(p1[s].T @ p2[images])  # orthogonal C of Phi1 C ~ Phi2[T] (Procrustes)
-        queries = np.hstack([deformed[rows], NORMAL_WEIGHT * _normals(deformed, self.faces1)[rows],
+        queries = np.hstack([deformed[rows], side * NORMAL_WEIGHT * _normals(deformed, self.faces1)[rows],
                              SPECTRAL_WEIGHT * p1[rows] @ (U @ Vt)])
         points = np.hstack([shell2, NORMAL_WEIGHT * _normals(shell2, self.faces2), SPECTRAL_WEIGHT * p2])
         if len(points) > PRUNE_ABOVE:
@@ -160,16 +164,17 @@ class _Step:
 
 
 def _rigid(points: np.ndarray, onto: np.ndarray, weights: np.ndarray):
-    """The proper rigid motion of least weighted squared distance from ``points`` to ``onto`` (Kabsch).
+    """The orthogonal motion of least weighted squared distance from ``points`` to ``onto`` (Kabsch).
 
-    Returns the motion as a function of (m, 3) coordinates; a rotation, never a reflection
-    (a mirrored map must not be straightened by it).
+    Returns the motion as a function of (m, 3) coordinates, and its determinant's sign: a
+    rotation (+1) for a map that keeps the orientation, a reflection (-1) for a mirrored one
+    (a user's landmarks may say "mirror", or the target be the mirror image). The stage refines
+    the map it is given; it does not choose between mirror images.
     """
     mean_p, mean_q = weights @ points, weights @ onto
     U, _, Vt = np.linalg.svd((points - mean_p).T @ (weights[:, None] * (onto - mean_q)))
-    flip = np.diag([1.0, 1.0, np.sign(np.linalg.det(U @ Vt)) or 1.0])
-    rotation = U @ flip @ Vt  # row vectors: x -> x R
-    return lambda x: (x - mean_p) @ rotation + mean_q
+    rotation = U @ Vt  # row vectors: x -> x R
+    return (lambda x: (x - mean_p) @ rotation + mean_q), (-1.0 if np.linalg.det(rotation) < 0 else 1.0)
 
 
 def _unit_shape(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:

@@ -22,9 +22,10 @@ For :math:`k = k_0 < \\dots < K`, given the current map :math:`T`:
 
 - **rigid motion**: the orthogonal motion and translation that best move the
   source shell onto the target shell's images (Kabsch, weighted by vertex
-  area): the shapes may come in any position. It is a rotation for a map
-  that keeps the orientation and a reflection for a mirrored one (whose
-  deformed normals are then turned): the stage refines the map it is
+  area): the shapes may come in any position. It is a rotation when the
+  given map keeps the orientation (:func:`meshcorr.orientation.orientation_score`
+  >= 0.5, decided once for the whole map) and a reflection when it mirrors
+  it (the deformed normals are then turned): the stage refines the map it is
   given, it does not choose between mirror images;
 - **deformation**: the displacement the map still asks of the source shell,
   low-passed to the same :math:`k` functions (the least-squares smooth
@@ -64,6 +65,7 @@ from ._threads import parallel_map
 from .errors import ParameterError
 from .laplacian import vertex_areas
 from .mesh import Mesh
+from .orientation import orientation_score
 from .refine import PRUNE_ABOVE, _basis_size, _nearest_rows, _nearest_rows_pruned, laplace_basis
 
 #: Weight of the shells' unit normals against coordinates of a unit-area shape.
@@ -123,7 +125,10 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
     sample = np.arange(n1) if n1 <= n_sample else np.sort(rng.choice(n1, size=n_sample, replace=False))
     weights = m1[sample] / m1[sample].sum()  # the sample's share of the mass-weighted projection
     mapping = mapping.copy()
-    step = _Step(source.faces, target.faces, sample, weights, landmarks)
+    # Whether the given map keeps the orientation or mirrors it (decided once, on the whole map:
+    # at the coarse scales a thin shape's shell fits its reflection nearly as well).
+    side = 1.0 if orientation_score(source, target, mapping, random_state=random_state) >= 0.5 else -1.0
+    step = _Step(source.faces, target.faces, sample, weights, landmarks, side)
     for size in scales:
         p1, p2 = phi1[:, :size], phi2[:, :size]
         mapping[sample] = step(p1, p2, _low_pass(p1, m1, x1), _low_pass(p2, m2, x2), mapping, sample)
@@ -135,8 +140,8 @@ class _Step:
     """One coarse-to-fine step: deform the source shell, fit C, map ``rows`` in the product space."""
 
     def __init__(self, faces1: np.ndarray, faces2: np.ndarray, sample: np.ndarray, weights: np.ndarray,
-                 landmarks: np.ndarray | None) -> None:
-        self.faces1, self.faces2, self.sample, self.weights = faces1, faces2, sample, weights
+                 landmarks: np.ndarray | None, side: float) -> None:
+        self.faces1, self.faces2, self.sample, self.weights, self.side = faces1, faces2, sample, weights, side
         self.landmarks = None if landmarks is None or len(landmarks) == 0 else np.asarray(landmarks)
 
     def pin(self, mapping: np.ndarray) -> np.ndarray:
@@ -151,8 +156,8 @@ class _Step:
         # A rigid motion first (the low-passed displacement of a rotation is not the rotation at
         # full resolution), then the smooth deformation: the displacement the map still asks for,
         # projected on the k functions (mass-weighted, estimated on the sample).
-        motion, side = _rigid(shell1[s], shell2[images], self.weights)
-        moved = motion(shell1)
+        side = self.side
+        moved = _rigid(shell1[s], shell2[images], self.weights, side)(shell1)
         deformed = moved + p1 @ (p1[s].T @ (self.weights[:, None] * (shell2[images] - moved[s])))
         U, _, Vt = np.linalg.svd(p1[s].T @ p2[images])  # orthogonal C of Phi1 C ~ Phi2[T] (Procrustes)
         queries = np.hstack([deformed[rows], side * NORMAL_WEIGHT * _normals(deformed, self.faces1)[rows],
@@ -163,18 +168,17 @@ class _Step:
         return _nearest_rows(queries, points)
 
 
-def _rigid(points: np.ndarray, onto: np.ndarray, weights: np.ndarray):
+def _rigid(points: np.ndarray, onto: np.ndarray, weights: np.ndarray, side: float):
     """The orthogonal motion of least weighted squared distance from ``points`` to ``onto`` (Kabsch).
 
-    Returns the motion as a function of (m, 3) coordinates, and its determinant's sign: a
-    rotation (+1) for a map that keeps the orientation, a reflection (-1) for a mirrored one
-    (a user's landmarks may say "mirror", or the target be the mirror image). The stage refines
-    the map it is given; it does not choose between mirror images.
+    ``side``: +1 for a rotation, -1 for a reflection (the determinant is held to it, as Kabsch's
+    correction holds it to +1). Returns the motion as a function of (m, 3) coordinates.
     """
     mean_p, mean_q = weights @ points, weights @ onto
     U, _, Vt = np.linalg.svd((points - mean_p).T @ (weights[:, None] * (onto - mean_q)))
-    rotation = U @ Vt  # row vectors: x -> x R
-    return (lambda x: (x - mean_p) @ rotation + mean_q), (-1.0 if np.linalg.det(rotation) < 0 else 1.0)
+    turn = side * (np.sign(np.linalg.det(U @ Vt)) or 1.0)
+    rotation = U @ np.diag([1.0, 1.0, turn]) @ Vt  # row vectors: x -> x R
+    return lambda x: (x - mean_p) @ rotation + mean_q
 
 
 def _unit_shape(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:

@@ -114,3 +114,4 @@ def test_a_mirrored_map_stays_mirrored(poses):
     mirror = Mesh(rest.vertices * [-1.0, 1.0, 1.0], rest.faces[:, ::-1])
     identity = np.arange(rest.n_vertices)
     assert np.mean(shell_refine(rest, mirror, identity, k=30) == identity) > 0.99
+

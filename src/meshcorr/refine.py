@@ -350,9 +350,7 @@ def zoomout(source_basis: np.ndarray, target_basis: np.ndarray, mapping: np.ndar
         if landmarks is not None:  # known pairs weigh in every fit as LANDMARK_WEIGHT sampled pairs each
             A = np.vstack([A, np.repeat(source_basis[landmarks[:, 0], :k], LANDMARK_WEIGHT, axis=0)])
             B = np.vstack([B, np.repeat(target_basis[landmarks[:, 1], :k], LANDMARK_WEIGHT, axis=0)])
-        # The orthogonal C closest to the least-squares fit of A C = B (Procrustes).
-        U, _, Vt = np.linalg.svd(A.T @ B)
-        C = U @ Vt
+        C = orthogonal_fit(A, B)
         new = s2[_nearest_rows(A[:len(s1)] @ C, target_basis[s2, :k])]
         history.append({"k": int(k), "changed": float(np.mean(new != images))})
         images = new
@@ -365,9 +363,53 @@ def zoomout(source_basis: np.ndarray, target_basis: np.ndarray, mapping: np.ndar
         out = np.empty(n1, dtype=np.int64)
         out[rows] = cols
         return out, history
-    if n2 > PRUNE_ABOVE:
-        return _nearest_rows_pruned(queries, target_basis, random_state=random_state), history
-    return _nearest_rows(queries, target_basis), history
+    return nearest_vertices(queries, target_basis, random_state=random_state), history
+
+
+def orthogonal_fit(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """The orthogonal ``(k, k)`` matrix C closest to the least-squares fit of ``A C = B`` (Procrustes).
+
+    Parameters
+    ----------
+    A, B : (m, k) float
+    """
+    U, _, Vt = np.linalg.svd(A.T @ B)
+    return U @ Vt
+
+
+def nearest_vertices(queries: np.ndarray, points: np.ndarray, *, random_state: int | None = 0) -> np.ndarray:
+    """Exact nearest row of ``points`` ``(n2, d)`` for each of ``queries`` ``(n1, d)``.
+
+    Brute force (:func:`_nearest_rows`), pruned by cells above :data:`PRUNE_ABOVE` points
+    (:func:`_nearest_rows_pruned`, seeded by ``random_state``; the same answer up to ties).
+    """
+    if len(points) > PRUNE_ABOVE:
+        return _nearest_rows_pruned(queries, points, random_state=random_state)
+    return _nearest_rows(queries, points)
+
+
+def check_vertex_map(mapping, source: Mesh, target: Mesh) -> np.ndarray:
+    """``mapping`` as an array, checked to hold one target vertex per source vertex (ParameterError)."""
+    mapping = np.asarray(mapping)
+    if mapping.shape != (source.n_vertices,) or (mapping.size and (
+            mapping.min() < 0 or mapping.max() >= target.n_vertices)):
+        raise ParameterError(f"The map to refine must hold one target vertex in [0, {target.n_vertices}) "
+                             f"per source vertex ({source.n_vertices}). Got shape {mapping.shape}.")
+    return mapping
+
+
+def pair_bases(source: Mesh, target: Mesh, k: int, *, random_state: int | None = 0
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Both meshes' first ``k`` Laplace-Beltrami eigenvectors (:func:`laplace_basis`), one thread each.
+
+    The two eigenproblems are independent and SuperLU's solves release the GIL: two threads
+    take ~1.5x less wall time on 2 cores (same results). parallel_map holds the process-wide
+    BLAS limit in this thread around both, so that neither thread's limiter can restore the
+    other's (meshcorr._threads).
+    """
+    phi1, phi2 = parallel_map(lambda mesh: laplace_basis(mesh, k, random_state=random_state)[1],
+                              (source, target))
+    return phi1, phi2
 
 
 def _basis_size(k: int, source: Mesh, target: Mesh) -> int:
@@ -498,16 +540,7 @@ def refine_map(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40, 
     history : list of dict
     """
     k = _basis_size(k, source, target)
-    mapping = np.asarray(mapping)
-    if mapping.shape != (source.n_vertices,) or (mapping.size and (
-            mapping.min() < 0 or mapping.max() >= target.n_vertices)):
-        raise ParameterError(f"The map to refine must hold one target vertex in [0, {target.n_vertices}) "
-                             f"per source vertex ({source.n_vertices}). Got shape {mapping.shape}.")
-    # The two eigenproblems are independent and SuperLU's solves release the
-    # GIL: two threads take ~1.5x less wall time on 2 cores (same results).
-    # parallel_map holds the process-wide BLAS limit in this thread around both,
-    # so that neither thread's limiter can restore the other's (meshcorr._threads).
-    phi1, phi2 = parallel_map(lambda mesh: laplace_basis(mesh, k, random_state=random_state)[1],
-                              (source, target))
+    mapping = check_vertex_map(mapping, source, target)
+    phi1, phi2 = pair_bases(source, target, k, random_state=random_state)
     return zoomout(phi1, phi2, mapping, k_start=min(k_start, k), step=step, n_sample=n_sample,
                    bijective=bijective, random_state=random_state, landmarks=landmarks)

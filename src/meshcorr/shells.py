@@ -61,12 +61,11 @@ import numpy as np
 import trimesh
 
 from ._params import check_int
-from ._threads import parallel_map
 from .errors import ParameterError
 from .laplacian import vertex_areas
 from .mesh import Mesh
 from .orientation import orientation_score
-from .refine import PRUNE_ABOVE, _basis_size, _nearest_rows, _nearest_rows_pruned, laplace_basis
+from .refine import _basis_size, check_vertex_map, nearest_vertices, orthogonal_fit, pair_bases
 
 #: Weight of the shells' unit normals against coordinates of a unit-area shape.
 NORMAL_WEIGHT = 0.3
@@ -110,21 +109,16 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
     if source.is_cloud or target.is_cloud:
         raise ParameterError("Shell refinement needs triangle meshes (the shells' normals need faces); "
                              "point clouds keep the ZoomOut map.")
-    n1, n2 = source.n_vertices, target.n_vertices
-    mapping = np.asarray(mapping, dtype=np.int64)
-    if mapping.shape != (n1,) or (n1 and (mapping.min() < 0 or mapping.max() >= n2)):
-        raise ParameterError(f"The map to refine must hold one target vertex in [0, {n2}) per source vertex "
-                             f"({n1}). Got shape {mapping.shape}.")
+    n1 = source.n_vertices
+    mapping = check_vertex_map(mapping, source, target).astype(np.int64)  # a copy, refined in place
     n_sample = check_int("n_sample", n_sample, minimum=1)
     k = _basis_size(k, source, target)
     scales = tuple(s for s in scales if s < k)
-    phi1, phi2 = parallel_map(lambda mesh: laplace_basis(mesh, k, random_state=random_state)[1],
-                              (source, target))
+    phi1, phi2 = pair_bases(source, target, k, random_state=random_state)
     (x1, m1), (x2, m2) = _unit_shape(source), _unit_shape(target)
     rng = np.random.default_rng(random_state)
     sample = np.arange(n1) if n1 <= n_sample else np.sort(rng.choice(n1, size=n_sample, replace=False))
     weights = m1[sample] / m1[sample].sum()  # the sample's share of the mass-weighted projection
-    mapping = mapping.copy()
     # Whether the given map keeps the orientation or mirrors it (decided once, on the whole map:
     # at the coarse scales a thin shape's shell fits its reflection nearly as well).
     side = 1.0 if orientation_score(source, target, mapping, random_state=random_state) >= 0.5 else -1.0
@@ -159,13 +153,11 @@ class _Step:
         side = self.side
         moved = _rigid(shell1[s], shell2[images], self.weights, side)(shell1)
         deformed = moved + p1 @ (p1[s].T @ (self.weights[:, None] * (shell2[images] - moved[s])))
-        U, _, Vt = np.linalg.svd(p1[s].T @ p2[images])  # orthogonal C of Phi1 C ~ Phi2[T] (Procrustes)
+        C = orthogonal_fit(p1[s], p2[images])  # Phi1 C ~ Phi2[T]
         queries = np.hstack([deformed[rows], side * NORMAL_WEIGHT * _normals(deformed, self.faces1)[rows],
-                             SPECTRAL_WEIGHT * p1[rows] @ (U @ Vt)])
+                             SPECTRAL_WEIGHT * p1[rows] @ C])
         points = np.hstack([shell2, NORMAL_WEIGHT * _normals(shell2, self.faces2), SPECTRAL_WEIGHT * p2])
-        if len(points) > PRUNE_ABOVE:
-            return _nearest_rows_pruned(queries, points)
-        return _nearest_rows(queries, points)
+        return nearest_vertices(queries, points)
 
 
 def _rigid(points: np.ndarray, onto: np.ndarray, weights: np.ndarray, side: float):

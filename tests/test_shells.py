@@ -115,3 +115,12 @@ def test_a_mirrored_map_stays_mirrored(poses):
     identity = np.arange(rest.n_vertices)
     assert np.mean(shell_refine(rest, mirror, identity, k=30) == identity) > 0.99
 
+
+def test_an_inside_out_file_is_aligned_by_its_outward_normals(poses):
+    # The same surface with every face's winding reversed: its outward normals are the repaired
+    # orientation's, not the file's, so the identity map is kept.
+    rest, bent = poses
+    inside_out = Mesh(bent.vertices, bent.faces[:, ::-1])
+    zoomed, _ = refine_map(rest, bent, np.arange(rest.n_vertices), k=30)
+    expected = shell_refine(rest, bent, zoomed, k=30)
+    np.testing.assert_array_equal(shell_refine(rest, inside_out, zoomed, k=30), expected)

@@ -64,7 +64,7 @@ from ._params import check_int
 from .errors import ParameterError
 from .laplacian import vertex_areas
 from .mesh import Mesh
-from .orientation import orientation_score
+from .orientation import mesh_orientation, orientation_score
 from .refine import _basis_size, check_vertex_map, nearest_vertices, orthogonal_fit, pair_bases
 
 #: Weight of the shells' unit normals against coordinates of a unit-area shape.
@@ -122,7 +122,8 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
     # Whether the given map keeps the orientation or mirrors it (decided once, on the whole map:
     # at the coarse scales a thin shape's shell fits its reflection nearly as well).
     side = 1.0 if orientation_score(source, target, mapping, random_state=random_state) >= 0.5 else -1.0
-    step = _Step(source.faces, target.faces, sample, weights, landmarks, side)
+    # The shells' normals from the outward-facing triangles (a file may come inside out).
+    step = _Step(mesh_orientation(source).faces, mesh_orientation(target).faces, sample, weights, landmarks, side)
     for size in scales:
         p1, p2 = phi1[:, :size], phi2[:, :size]
         mapping[sample] = step(p1, p2, _low_pass(p1, m1, x1), _low_pass(p2, m2, x2), mapping, sample)

@@ -181,12 +181,16 @@ def test_prepared_shapes_give_the_same_partial_map(pair, plane_part):
     np.testing.assert_array_equal(again.matched_region, result.matched_region)
 
 
+def _write(path, mesh):
+    """``mesh`` exported to ``path`` (its format from the suffix); the path."""
+    trimesh.Trimesh(mesh.vertices, mesh.faces, process=False).export(path)
+    return path
+
+
 def test_cli_partial_json_reports_the_matched_region(pair, plane_part, tmp_path, capsys):
     source, target, truth, back = pair
     part, kept, result = plane_part
-    src, tgt = tmp_path / "part.off", tmp_path / "whole.ply"
-    trimesh.Trimesh(part.vertices, part.faces, process=False).export(src)
-    trimesh.Trimesh(target.vertices, target.faces, process=False).export(tgt)
+    src, tgt = _write(tmp_path / "part.off", part), _write(tmp_path / "whole.ply", target)
     out = tmp_path / "map.txt"
     assert main(["match", str(src), str(tgt), "-o", str(out), "--partial", "source", "--json"]) == 0
     captured = capsys.readouterr()
@@ -240,9 +244,7 @@ def test_no_start_at_all_is_refused(plane_part, pair):
 def test_cli_refuses_partial_with_bijective_without_a_traceback(plane_part, pair, tmp_path, capsys):
     source, target, truth, back = pair
     part, kept, _ = plane_part
-    src, tgt = tmp_path / "part.off", tmp_path / "whole.off"
-    trimesh.Trimesh(part.vertices, part.faces, process=False).export(src)
-    trimesh.Trimesh(target.vertices, target.faces, process=False).export(tgt)
+    src, tgt = _write(tmp_path / "part.off", part), _write(tmp_path / "whole.off", target)
     code = main(["match", str(src), str(tgt), "-o", str(tmp_path / "map.txt"), "--partial", "source",
                  "--bijective"])
     err = capsys.readouterr().err

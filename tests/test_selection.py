@@ -11,7 +11,7 @@ from meshcorr.extremities import find_extremities, match_extremities
 from meshcorr.landmark_map import check_landmarks, landmark_map
 from meshcorr.mesh import Mesh, as_mesh
 from meshcorr.orientation import orientation_score, regional_orientation
-from meshcorr.selection import MapCandidate, choose_map, score_candidates
+from meshcorr.selection import MapCandidate, choose_map, energy, score_candidates
 
 # A left/right symmetric "person" on a sphere: head, two arms, two legs, a nose in front.
 TIPS = {"head": ((0, 0, 1), 0.9), "nose": ((0, 1, 0.2), 0.35), "arm_l": ((1, 0, 0.3), 0.8),
@@ -173,3 +173,46 @@ def test_the_matching_cost_is_kept_when_the_whole_map_choice_keeps_the_spectral_
     pinned = meshcorr.match((shape.vertices, shape.faces), (copy.vertices, copy.faces), refine=False,
                             landmarks=[(0, int(result.map[0]))])
     assert pinned.cost is None  # a pinned landmark is no longer the proximity matching's map
+
+
+
+def test_the_orientation_counts_in_the_energy_of_maps_the_shells_refined():
+    right = MapCandidate("right", np.zeros(3, dtype=np.int64), orientation=0.98, distortion=0.036, curvature=0.53,
+                         extra={"shells": 1.0})
+    turned = MapCandidate("turned", np.zeros(3, dtype=np.int64), orientation=0.92, distortion=0.035, curvature=0.52,
+                          extra={"shells": 1.0})
+    # Nearly tied on distortion and curvature: the map that reverses less of the surface wins.
+    assert energy(right, True) < energy(turned, True)
+    assert choose_map([turned, right], reliable=True)[0] is right
+    # A ZoomOut map's score is noisy: it does not count there, nor without a reliable orientation.
+    for candidate in (right, turned):
+        candidate.extra.pop("shells")
+    assert energy(turned, True) < energy(right, True)
+    assert energy(right, False) == right.distortion
+    assert energy(MapCandidate("kept", np.zeros(3, dtype=np.int64), orientation=1.0, distortion=0.1, curvature=1.0,
+                               extra={"shells": 1.0}), True) > 0  # floored: a perfect score still compares
+
+
+def test_a_map_with_swapped_legs_is_repaired_from_its_consistent_part(person):
+    from meshcorr.orientation import consistent_vertices
+    from meshcorr.repair import repair_candidates, repair_map
+
+    mesh, mirror = person
+    identity = np.arange(mesh.n_vertices)
+    legs = mesh.vertices[:, 2] < -0.6
+    swapped = np.where(legs, mirror, identity)
+    # The consistent part leaves the legs out and keeps most of the rest.
+    good = consistent_vertices(mesh, mesh, swapped)
+    assert legs[good].mean() < 0.05 and len(good) > 0.5 * (~legs).sum()
+    repaired = repair_map(mesh, mesh, swapped, k=30)
+    assert np.mean(repaired[legs] == identity[legs]) > 0.98  # the legs are put back (all 642 vertices: 1.0)
+    assert np.mean(repaired == identity) > 0.9
+    # As a candidate of the whole-map choice: only the partly mirrored map is repaired.
+    candidates = [MapCandidate("legs swapped", swapped), MapCandidate("right", identity),
+                  MapCandidate("mirror", mirror)]
+    g = _geodesics(mesh)
+    score_candidates(candidates, mesh, mesh, g, g, reliable=True)
+    added = repair_candidates(candidates, mesh, mesh, k=30)
+    assert [c.origin for c in added] == ["repaired-legs swapped"]
+    # Too little keeps the orientation (a mirror image): nothing to start from.
+    assert repair_map(mesh, mesh, mirror, k=30) is None

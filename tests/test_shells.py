@@ -124,3 +124,33 @@ def test_an_inside_out_file_is_aligned_by_its_outward_normals(poses):
     zoomed, _ = refine_map(rest, bent, np.arange(rest.n_vertices), k=30)
     expected = shell_refine(rest, bent, zoomed, k=30)
     np.testing.assert_array_equal(shell_refine(rest, inside_out, zoomed, k=30), expected)
+
+
+def test_a_given_orientation_score_decides_the_side(poses):
+    from meshcorr.orientation import orientation_score
+
+    rest, bent = poses
+    zoomed, _ = refine_map(rest, bent, np.arange(rest.n_vertices), k=30)
+    measured = orientation_score(rest, bent, zoomed)
+    expected = shell_refine(rest, bent, zoomed, k=30)
+    np.testing.assert_array_equal(shell_refine(rest, bent, zoomed, k=30, orientation=measured), expected)
+    # Told that the map mirrors the shape, the stage aligns by a reflection: the map is lost.
+    mirrored = shell_refine(rest, bent, zoomed, k=30, orientation=0.0)
+    assert np.mean(mirrored == np.arange(rest.n_vertices)) < 0.5 * np.mean(expected == np.arange(rest.n_vertices))
+
+
+
+def test_the_candidates_that_keep_the_orientation_are_judged_after_the_shells(copy_files):
+    import meshcorr
+
+    (source, target), truth = copy_files
+    result = meshcorr.match(source, target)
+    kept = [c for c in result.map_candidates if c["orientation"] >= 0.5]
+    assert kept and all(c.get("shells") == 1.0 for c in kept)
+    assert all("shells" not in c for c in result.map_candidates if c["orientation"] < 0.5)
+    chosen = [c for c in result.map_candidates if c["chosen"]][0]
+    assert chosen["shells"] == 1.0 and chosen["orientation"] > 0.9  # scored as it is returned
+    assert np.mean(result.map == truth) > 0.99
+    # Without the shells the candidates are judged as ZoomOut leaves them.
+    plain = meshcorr.match(source, target, shells=False)
+    assert not any("shells" in c for c in plain.map_candidates)

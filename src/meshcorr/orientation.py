@@ -426,6 +426,34 @@ def orientation_scores(source: Mesh, target: Mesh, mapping: np.ndarray, *, n_reg
                                                    random_state)
 
 
+def consistent_vertices(source: Mesh, target: Mesh, mapping: np.ndarray, *, n_regions: int = 12,
+                        n_neighbors: int = 16, n_sample: int = 2000, random_state: int | None = 0) -> np.ndarray:
+    """The sampled source vertices where a map keeps the orientation, in regions that keep it.
+
+    Parameters
+    ----------
+    source, target : Mesh
+    mapping : (n1,) int
+    n_regions, n_neighbors, n_sample, random_state
+        As :func:`regional_orientation`.
+
+    Returns
+    -------
+    vertices : (m,) int
+        The sampled vertices of :func:`orientation_score` whose own mapped
+        neighbourhood keeps the orientation (triple product > 0) and whose
+        region's score (:func:`regional_orientation`) is at least 0.5: the
+        part of a partly mirrored map that is not mirrored
+        (:mod:`meshcorr.repair`).
+    """
+    n_neighbors, n_sample, mapping = _checked(source, target, mapping, n_neighbors, n_sample)
+    n_regions = check_int("n_regions", n_regions, minimum=1)
+    sample, triple, areas = _orientation_signs(source, target, mapping, n_neighbors, n_sample, random_state)
+    region, _ = _regions(source, n_regions, n_neighbors, n_sample, random_state)
+    regional = _regional_scores(source, triple, areas, n_regions, n_neighbors, n_sample, random_state)
+    return sample[(triple > 0) & (regional[region] >= 0.5)]
+
+
 def _regions(source: Mesh, n_regions: int, n_neighbors: int, n_sample: int, random_state) -> tuple[np.ndarray, int]:
     """The region of each sampled vertex of :func:`_neighbourhoods` ``(s,)`` and the region count.
 

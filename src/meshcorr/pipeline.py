@@ -18,6 +18,7 @@ spectral domain", Shape Modeling International 2006.
 from __future__ import annotations
 
 import warnings
+from typing import NamedTuple
 
 import numpy as np
 
@@ -41,7 +42,8 @@ from .progress import as_progress
 from .refine import prefetch_bases, refine_map
 from .reorder import REORDER_MODES, Configuration, rank_configurations
 from .result import Correspondence
-from .selection import MapCandidate, choose_map, score_candidates
+from .repair import repair_candidates
+from .selection import MapCandidate, choose_map, score_candidates, shell_candidates
 from .shells import shell_refine
 from .symmetry import (SYMMETRY_MODES, WIDE_CANDIDATES, Candidate, candidate_ranks, choose, metric_distortion,
                        right_map_missing)
@@ -273,16 +275,19 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
                                                         bijective=bijective, random_state=random_state)
     # Whole-map choice: the spectral map against maps from matched extremities
     # and from the user's landmarks, each refined alike (meshcorr.selection).
-    local_map, other_map, map_candidates = chosen.mapping, None if other is None else other.mapping, []
-    spectral_kept = True
-    if symmetry == "auto" and (extremities or pairs is not None):
-        with timer.stage("whole-map"):
-            local_map, other_map, map_candidates, spectral_kept = _whole_map_choice(
-                src, tgt, spectra, chosen.mapping, other_map, pairs, extremities=extremities, refine=refine,
-                refine_k=refine_k, bijective=bijective, reliable=reliable, random_state=random_state)
-    if refine and shells and not bijective and not (src.is_cloud or tgt.is_cloud):
+    shell_stage = refine and shells and not bijective and not (src.is_cloud or tgt.is_cloud)
+    choice = _Choice(chosen.mapping, None if other is None else other.mapping, [])
+    if symmetry == "auto" and (extremities or pairs is not None):  # stages "whole-map" and "shells"
+        choice = _whole_map_choice(
+            src, tgt, spectra, chosen.mapping, choice.other, pairs, extremities=extremities, refine=refine,
+            refine_k=refine_k, bijective=bijective, reliable=reliable, shells=shell_stage, timer=timer,
+            random_state=random_state)
+    local_map, other_map, map_candidates = choice.mapping, choice.other, choice.summaries
+    spectral_kept = choice.spectral_kept
+    if shell_stage and not choice.shelled:
         with timer.stage("shells"):  # meshcorr.shells: extrinsic alignment of the chosen map
-            local_map = shell_refine(src, tgt, local_map, k=refine_k, landmarks=pairs, random_state=random_state)
+            local_map = shell_refine(src, tgt, local_map, k=refine_k, landmarks=pairs,
+                                     orientation=choice.orientation, random_state=random_state)
         spectral_kept = False
     icp, anchors = chosen.extra["icp"], chosen.extra["anchors"]
 
@@ -390,52 +395,78 @@ def _match_partial(shapes, pairs: np.ndarray | None, partial: str, spectral_opti
         matched_area_fraction=found.area_fraction)
 
 
+class _Choice(NamedTuple):
+    """What :func:`_whole_map_choice` returns."""
+
+    mapping: np.ndarray  # the chosen local map
+    other: np.ndarray | None  # the least distorted map of the other orientation, else the spectral alternative
+    summaries: list  # every candidate's scores (MapCandidate.to_dict, chosen, alternative)
+    spectral_kept: bool = True  # the chosen map is the spectral map unchanged (no other candidate, no pin)
+    shelled: bool = False  # the candidates were judged after meshcorr.shells: the chosen map is final
+    orientation: float | None = None  # the chosen map's orientation score, when it is that exact map's
+
+
 def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, spectral_other,
                       pairs: np.ndarray | None, *, extremities: bool, refine: bool, refine_k: int,
-                      bijective: bool, reliable: bool, random_state):
+                      bijective: bool, reliable: bool, shells: bool, timer: StageTimer, random_state) -> _Choice:
     """Candidate maps from extremities and landmarks, scored with the spectral map; the winner.
 
-    Returns the chosen local map, the alternative (the least distorted map of
-    the other orientation, else the spectral alternative), every candidate's
-    scores, and whether the chosen map is the spectral map unchanged (not
-    another candidate, no landmark pinned).
+    With ``shells`` on and a reliable orientation, the choice is made between
+    the maps as the pipeline returns them: each partly mirrored candidate
+    adds its repair (:func:`meshcorr.repair.repair_candidates`), and every
+    candidate that keeps the orientation is refined by the smooth shells
+    (:func:`meshcorr.selection.shell_candidates`) and scored again. A right
+    map whose ZoomOut vertices are scattered locally scores as low as a
+    mirrored one before the shells (TOSCA michael11 -> michael16: 0.59
+    against 0.2-0.58) and above 0.9 after them.
     """
-    g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
-    starts: list[tuple[str, np.ndarray, dict]] = []
-    if pairs is not None:
-        starts.append(("landmarks", landmark_map(g1, g2, pairs), {}))
-    if extremities:
-        tips = [spectrum_extremities(mesh, spectrum, random_state=random_state)
-                for mesh, spectrum in zip((src, tgt), spectra)]
-        for rank, (energy, assignment) in enumerate(match_extremities(*tips)):
-            for how in EXTREMITY_STARTS if reliable else ("distances",):
-                start = (fit_oriented_map(src, tgt, g1, g2, assignment, basis_k=refine_k,
-                                          random_state=random_state) if how == "oriented"
-                         else landmark_map(g1, g2, assignment))
-                suffix = "" if how == EXTREMITY_STARTS[0] or not reliable else f"-{how}"
-                starts.append((f"extremities-{rank}{suffix}", start, {"extremity_energy": energy}))
-    candidates = [MapCandidate("spectral", spectral_map)]
-    if spectral_other is not None:  # unrefined: it is kept as the alternative, rarely chosen
-        candidates.append(MapCandidate("spectral-alternative", spectral_other))
-    def refined(start: tuple[str, np.ndarray, dict]) -> np.ndarray:
-        # Only the landmarks' own map is held to them while refined: the others must show
-        # by themselves whether they agree with the landmarks (meshcorr.selection).
-        origin, mapping, _ = start
-        pins = pairs if origin == "landmarks" else None
-        return refine_map(src, tgt, mapping, k=refine_k, bijective=bijective, random_state=random_state,
-                          landmarks=pins)[0] if refine else mapping
+    with timer.stage("whole-map"):
+        g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
+        starts: list[tuple[str, np.ndarray, dict]] = []
+        if pairs is not None:
+            starts.append(("landmarks", landmark_map(g1, g2, pairs), {}))
+        if extremities:
+            tips = [spectrum_extremities(mesh, spectrum, random_state=random_state)
+                    for mesh, spectrum in zip((src, tgt), spectra)]
+            for rank, (energy, assignment) in enumerate(match_extremities(*tips)):
+                for how in EXTREMITY_STARTS if reliable else ("distances",):
+                    start = (fit_oriented_map(src, tgt, g1, g2, assignment, basis_k=refine_k,
+                                              random_state=random_state) if how == "oriented"
+                             else landmark_map(g1, g2, assignment))
+                    suffix = "" if how == EXTREMITY_STARTS[0] or not reliable else f"-{how}"
+                    starts.append((f"extremities-{rank}{suffix}", start, {"extremity_energy": energy}))
+        candidates = [MapCandidate("spectral", spectral_map)]
+        if spectral_other is not None:  # unrefined: it is kept as the alternative, rarely chosen
+            candidates.append(MapCandidate("spectral-alternative", spectral_other))
+        def refined(start: tuple[str, np.ndarray, dict]) -> np.ndarray:
+            # Only the landmarks' own map is held to them while refined: the others must show
+            # by themselves whether they agree with the landmarks (meshcorr.selection).
+            origin, mapping, _ = start
+            pins = pairs if origin == "landmarks" else None
+            return refine_map(src, tgt, mapping, k=refine_k, bijective=bijective, random_state=random_state,
+                              landmarks=pins)[0] if refine else mapping
 
-    # Independent refinements, mostly BLAS and LAPACK: one thread per core (same maps as a loop).
-    for (origin, _, extra), mapping in zip(starts, parallel_map(refined, starts)):
-        candidates.append(MapCandidate(origin, mapping, extra=extra))
-    score_candidates(candidates, src, tgt, g1, g2, reliable=reliable, landmarks=pairs, random_state=random_state)
+        # Independent refinements, mostly BLAS and LAPACK: one thread per core (same maps as a loop).
+        for (origin, _, extra), mapping in zip(starts, parallel_map(refined, starts)):
+            candidates.append(MapCandidate(origin, mapping, extra=extra))
+        score_candidates(candidates, src, tgt, g1, g2, reliable=reliable, landmarks=pairs, random_state=random_state)
+    if shells and reliable:  # judge the maps as they will be returned (module docstrings of these steps)
+        with timer.stage("shells"):
+            scored = dict(reliable=reliable, landmarks=pairs, random_state=random_state)
+            repaired = repair_candidates(candidates, src, tgt, k=refine_k, random_state=random_state)
+            score_candidates(repaired, src, tgt, g1, g2, **scored)
+            candidates += repaired
+            final = shell_candidates(candidates, src, tgt, k=refine_k, landmarks=pairs, random_state=random_state)
+            score_candidates(final, src, tgt, g1, g2, **scored)
     chosen, alternative = choose_map(candidates, reliable=reliable)
     mapping = chosen.mapping.copy()
     if pairs is not None:
         mapping[pairs[:, 0]] = pairs[:, 1]
     other = alternative.mapping if alternative is not None else spectral_other
     summaries = [dict(c.to_dict(), chosen=c is chosen, alternative=c is alternative) for c in candidates]
-    return mapping, other, summaries, chosen.origin == "spectral" and pairs is None
+    shelled = bool(chosen.extra.get("shells"))
+    return _Choice(mapping, other, summaries, chosen.origin == "spectral" and pairs is None and not shelled,
+                   shelled, chosen.orientation if pairs is None else None)
 
 
 def _chosen_first(configurations: list[Configuration], chosen: Candidate,

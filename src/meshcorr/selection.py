@@ -55,8 +55,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ._threads import parallel_map
 from .curvature import curvature_disagreement
 from .orientation import orientation_scores
+from .shells import shell_refine
 from .symmetry import _rounded, metric_distortion
 
 #: Maps of orientation score below this are set aside when one above exists.
@@ -65,6 +67,8 @@ ORIENTATION_MIN = 0.6
 N_DISTORTION_SOURCES = 24
 #: Exponent of the curvature disagreement in the energy a map is chosen by.
 CURVATURE_POWER = 3
+#: Least area fraction of reversed orientation counted in the energy of a map refined by the shells.
+REVERSED_FLOOR = 1e-3
 #: A landmark is kept by a map that sends it within this (normalised geodesic distance) of its partner.
 LANDMARK_RADIUS = 0.05
 
@@ -210,7 +214,51 @@ def choose_map(candidates: list[MapCandidate], *, reliable: bool
 
 
 def energy(candidate: MapCandidate, reliable: bool) -> float:
-    """distortion x curvature^3 (module docstring); the distortion alone without a reliable orientation."""
+    """distortion x curvature^3, times (1 - orientation) for a map the shells refined (module docstring).
+
+    The distortion alone without a reliable orientation.
+    """
     if not reliable:
         return candidate.distortion
-    return candidate.distortion * candidate.curvature ** CURVATURE_POWER
+    value = candidate.distortion * candidate.curvature ** CURVATURE_POWER
+    if candidate.extra.get("shells"):
+        value *= max(1.0 - candidate.orientation, REVERSED_FLOOR)
+    return value
+
+
+def shell_candidates(candidates: list[MapCandidate], source, target, *, k: int,
+                     landmarks: np.ndarray | None = None, random_state: int | None = 0) -> list[MapCandidate]:
+    """Refine the candidates that keep the orientation by :func:`meshcorr.shells.shell_refine`, in place.
+
+    Parameters
+    ----------
+    candidates : list of MapCandidate
+        Scored by :func:`score_candidates`.
+    source, target : Mesh
+        Triangle meshes with a reliable outside.
+    k : int
+        Laplace-Beltrami basis size of the shells (the pipeline's ``refine_k``).
+    landmarks : (L, 2) int, optional
+        User landmark pairs: held by the ``"landmarks"`` candidate only (the
+        others must show by themselves whether they agree with them).
+    random_state : int or None
+
+    Returns
+    -------
+    refined : list of MapCandidate
+        The candidates of orientation score >= 0.5, their maps replaced by
+        the shells' and ``extra["shells"] = 1``: to be scored again. The
+        others (mirror images, set aside by :func:`choose_map` whenever one
+        of these exists) are left as they are.
+    """
+    chosen = [c for c in candidates if c.orientation >= 0.5]
+
+    def shelled(candidate: MapCandidate) -> np.ndarray:
+        pins = landmarks if candidate.origin == "landmarks" else None
+        return shell_refine(source, target, candidate.mapping, k=k, landmarks=pins,
+                            orientation=candidate.orientation, random_state=random_state)
+
+    for candidate, mapping in zip(chosen, parallel_map(shelled, chosen)):  # one thread per core
+        candidate.mapping = mapping
+        candidate.extra["shells"] = 1.0
+    return chosen

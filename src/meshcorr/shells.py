@@ -79,7 +79,8 @@ N_SAMPLE = 1000
 
 def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40,
                  scales: tuple[int, ...] = SCALES, n_sample: int = N_SAMPLE,
-                 landmarks: np.ndarray | None = None, random_state: int | None = 0) -> np.ndarray:
+                 landmarks: np.ndarray | None = None, orientation: float | None = None,
+                 random_state: int | None = 0) -> np.ndarray:
     """Refine a vertex map by aligning the shapes' smooth shells (module docstring).
 
     Parameters
@@ -98,6 +99,10 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
         maps every vertex.
     landmarks : (L, 2) int, optional
         Known (source, target) vertex pairs, held in the map at every step.
+    orientation : float, optional
+        The given map's :func:`~meshcorr.orientation.orientation_score` with
+        the same ``random_state``, when the caller has it (it decides between
+        a rotation and a reflection); measured here when None.
     random_state : int or None
         Seed of the bases' start vectors and of the sample.
 
@@ -121,7 +126,9 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
     weights = m1[sample] / m1[sample].sum()  # the sample's share of the mass-weighted projection
     # Whether the given map keeps the orientation or mirrors it (decided once, on the whole map:
     # at the coarse scales a thin shape's shell fits its reflection nearly as well).
-    side = 1.0 if orientation_score(source, target, mapping, random_state=random_state) >= 0.5 else -1.0
+    if orientation is None:
+        orientation = orientation_score(source, target, mapping, random_state=random_state)
+    side = 1.0 if orientation >= 0.5 else -1.0
     # The shells' normals from the outward-facing triangles (a file may come inside out).
     step = _Step(mesh_orientation(source).faces, mesh_orientation(target).faces, sample, weights, landmarks, side)
     for size in scales:

@@ -419,10 +419,18 @@ def orientation_scores(source: Mesh, target: Mesh, mapping: np.ndarray, *, n_reg
     regional : (r,) float
         ``regional_orientation(source, target, mapping, ...)``, the same values.
     """
+    _, triple, areas, regional = _signs_by_region(source, target, mapping, n_regions, n_neighbors, n_sample,
+                                                  random_state)
+    return _score(triple, areas), regional
+
+
+def _signs_by_region(source: Mesh, target: Mesh, mapping, n_regions, n_neighbors, n_sample, random_state
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The checked inputs' :func:`_orientation_signs` ``(sample, triple, areas)`` and regional scores ``(r,)``."""
     n_neighbors, n_sample, mapping = _checked(source, target, mapping, n_neighbors, n_sample)
     n_regions = check_int("n_regions", n_regions, minimum=1)
-    _, triple, areas = _orientation_signs(source, target, mapping, n_neighbors, n_sample, random_state)
-    return _score(triple, areas), _regional_scores(source, triple, areas, n_regions, n_neighbors, n_sample,
+    sample, triple, areas = _orientation_signs(source, target, mapping, n_neighbors, n_sample, random_state)
+    return sample, triple, areas, _regional_scores(source, triple, areas, n_regions, n_neighbors, n_sample,
                                                    random_state)
 
 
@@ -446,11 +454,9 @@ def consistent_vertices(source: Mesh, target: Mesh, mapping: np.ndarray, *, n_re
         part of a partly mirrored map that is not mirrored
         (:mod:`meshcorr.repair`).
     """
-    n_neighbors, n_sample, mapping = _checked(source, target, mapping, n_neighbors, n_sample)
-    n_regions = check_int("n_regions", n_regions, minimum=1)
-    sample, triple, areas = _orientation_signs(source, target, mapping, n_neighbors, n_sample, random_state)
+    sample, triple, _, regional = _signs_by_region(source, target, mapping, n_regions, n_neighbors, n_sample,
+                                                   random_state)
     region, _ = _regions(source, n_regions, n_neighbors, n_sample, random_state)
-    regional = _regional_scores(source, triple, areas, n_regions, n_neighbors, n_sample, random_state)
     return sample[(triple > 0) & (regional[region] >= 0.5)]
 
 

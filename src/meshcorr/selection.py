@@ -32,10 +32,19 @@ one that the following energies prefer:
   development pairs, ``benchmarks/RESULTS-robustness-trials.md``, and the
   orientation threshold the best of 0.5-0.65). Without a reliable
   orientation the signed curvature is undefined and the distortion alone
-  decides.
+  decides. For a map refined by the smooth shells (:func:`shell_candidates`:
+  the pipeline judges the maps as it returns them) the energy is multiplied
+  by the area fraction on which the map reverses the orientation,
+  :math:`1 - \text{orientation}` (floored at :data:`REVERSED_FLOOR`): after
+  the shells a right map keeps the orientation almost everywhere, a map
+  turned half a turn or with a part mirrored does not. On ZoomOut's maps the
+  score is too noisy for that (vertices scattered locally), and the factor
+  is left out.
 - **regional orientation** (:func:`meshcorr.orientation.regional_orientation`):
   the orientation score of the worst of 12 regions; reported, so that a
-  partly mirrored result can be seen in ``--json``.
+  partly mirrored result can be seen in ``--json``; a map whose worst region
+  is below :data:`meshcorr.repair.REPAIR_BELOW` gets a repaired candidate
+  (:func:`meshcorr.repair.repair_candidates`).
 - **landmarks kept**: with user landmarks, the fraction of them that the map
   sends within :data:`LANDMARK_RADIUS` (of the target's largest geodesic
   distance) of where the user says they go; only the maps that keep the

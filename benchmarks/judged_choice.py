@@ -13,7 +13,8 @@ map of the whole-map choice twice, with its scores and its errors against the tr
 - *before*: the rule of the library before the change: ZoomOut's maps without repairs, least
   distortion x curvature^3 among orientation scores >= 0.6, then the shells on the pick;
 - *adopted*: the library's rule: repairs added, every map of orientation >= 0.5 judged after the
-  shells, least distortion x curvature^3 x (1 - orientation) for those;
+  shells, least distortion x curvature^3 x (1 - orientation before) x (1 - orientation after)
+  for those;
 - variants of it, and the oracle (the truth picks).
 
 Usage::
@@ -100,12 +101,20 @@ def run(pair) -> list[dict]:
     return rows
 
 
-def _energy(row: dict, reversed_area: bool) -> float:
+def _energy(row: dict, reversed_area: str) -> float:
+    """distortion x curvature^3, times the reversed areas named by ``reversed_area``.
+
+    ``"both"`` (the library's): before and after the shells, for a map the shells refined;
+    ``"after"``: after them only; ``"none"``.
+    """
     value = row["distortion"] * row["curvature"] ** 3
-    return value * max(1.0 - row["orientation"], REVERSED_FLOOR) if reversed_area else value
+    if reversed_area == "none" or "before" not in row:
+        return value
+    factors = (row["before"], row["orientation"]) if reversed_area == "both" else (row["orientation"],)
+    return value * float(np.prod([max(1.0 - o, REVERSED_FLOOR) for o in factors]))
 
 
-def _choose(rows: list[dict], reversed_area: bool) -> dict:
+def _choose(rows: list[dict], reversed_area: str) -> dict:
     pool = [r for r in rows if r["orientation"] >= ORIENTATION_MIN] or rows
     return min(pool, key=lambda r: _energy(r, reversed_area))
 
@@ -125,20 +134,22 @@ def replay(out: Path) -> str:
         return [s for s in p["shells"] if s["origin"] == r["origin"]][0]
 
     def judged(p, repairs=True, all_shelled=False):
-        return [shelled(p, r) if (r["orientation"] >= 0.5 or all_shelled) else r for r in p["raw"]
-                if repairs or not r["origin"].startswith("repaired")]
+        return [dict(shelled(p, r), before=r["orientation"]) if (r["orientation"] >= 0.5 or all_shelled) else r
+                for r in p["raw"] if repairs or not r["origin"].startswith("repaired")]
 
     def plain(p):
         return [r for r in p["raw"] if not r["origin"].startswith("repaired")]
 
     rules = {
         "library as run": lambda p: p["final"][0],
-        "before: ZoomOut's maps, distortion x curvature^3, then the shells": lambda p: shelled(p, _choose(plain(p), False)),
-        "adopted: repairs, judged after the shells, x (1 - orientation)": lambda p: _choose(judged(p), True),
-        "adopted without the repairs": lambda p: _choose(judged(p, repairs=False), True),
-        "adopted without (1 - orientation)": lambda p: _choose(judged(p), False),
-        "adopted, every map shelled (mirrored ones too)": lambda p: _choose(judged(p, all_shelled=True), True),
-        "ZoomOut's maps with repairs, x (1 - orientation), then the shells": lambda p: shelled(p, _choose(p["raw"], True)),
+        "before: ZoomOut's maps, distortion x curvature^3, then the shells":
+            lambda p: shelled(p, _choose(plain(p), "none")),
+        "adopted: repairs, judged after the shells, x reversed areas before and after":
+            lambda p: _choose(judged(p), "both"),
+        "adopted without the repairs": lambda p: _choose(judged(p, repairs=False), "both"),
+        "adopted, x reversed area after the shells only": lambda p: _choose(judged(p), "after"),
+        "adopted without the reversed areas": lambda p: _choose(judged(p), "none"),
+        "adopted, every map shelled (mirrored ones too)": lambda p: _choose(judged(p, all_shelled=True), "both"),
         "oracle (the truth picks), ZoomOut's maps": lambda p: min(p["raw"], key=lambda r: r["mean_error"]),
         "oracle, after the shells": lambda p: min(p["shells"], key=lambda r: r["mean_error"]),
     }

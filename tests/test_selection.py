@@ -177,20 +177,22 @@ def test_the_matching_cost_is_kept_when_the_whole_map_choice_keeps_the_spectral_
 
 
 def test_the_orientation_counts_in_the_energy_of_maps_the_shells_refined():
-    right = MapCandidate("right", np.zeros(3, dtype=np.int64), orientation=0.98, distortion=0.036, curvature=0.53,
-                         extra={"shells": 1.0})
-    turned = MapCandidate("turned", np.zeros(3, dtype=np.int64), orientation=0.92, distortion=0.035, curvature=0.52,
-                          extra={"shells": 1.0})
+    def candidate(name, orientation, distortion, curvature, before=None):
+        extra = {} if before is None else {"shells": 1.0, "zoomout_orientation": before}
+        return MapCandidate(name, np.zeros(3, dtype=np.int64), orientation=orientation, distortion=distortion,
+                            curvature=curvature, extra=extra)
+
     # Nearly tied on distortion and curvature: the map that reverses less of the surface wins.
-    assert energy(right, True) < energy(turned, True)
+    right, turned = candidate("right", 0.98, 0.036, 0.53, 0.81), candidate("turned", 0.92, 0.035, 0.52, 0.81)
+    assert choose_map([turned, right], reliable=True)[0] is right
+    # Counted before the shells as well: they tidy a map turned front to back (TOSCA michael16 -> michael8).
+    right, turned = candidate("right", 0.928, 0.028, 0.317, 0.826), candidate("turned", 0.953, 0.029, 0.349, 0.608)
     assert choose_map([turned, right], reliable=True)[0] is right
     # A ZoomOut map's score is noisy: it does not count there, nor without a reliable orientation.
-    for candidate in (right, turned):
-        candidate.extra.pop("shells")
+    right, turned = candidate("right", 0.98, 0.036, 0.53), candidate("turned", 0.92, 0.035, 0.52)
     assert energy(turned, True) < energy(right, True)
     assert energy(right, False) == right.distortion
-    assert energy(MapCandidate("kept", np.zeros(3, dtype=np.int64), orientation=1.0, distortion=0.1, curvature=1.0,
-                               extra={"shells": 1.0}), True) > 0  # floored: a perfect score still compares
+    assert energy(candidate("kept", 1.0, 0.1, 1.0, 1.0), True) > 0  # floored: a perfect score still compares
 
 
 def test_a_map_with_swapped_legs_is_repaired_from_its_consistent_part(person):

@@ -218,3 +218,28 @@ def test_a_map_with_swapped_legs_is_repaired_from_its_consistent_part(person):
     assert [c.origin for c in added] == ["repaired-legs swapped"]
     # Too little keeps the orientation (a mirror image): nothing to start from.
     assert repair_map(mesh, mesh, mirror, k=30) is None
+
+
+def test_oriented_starts_add_their_candidates_and_keep_the_permutation(tmp_path, capsys):
+    import json
+
+    import trimesh
+
+    from meshcorr.cli import main
+
+    shape = datasets.creature(resolution=1)
+    copy, truth = datasets.rigid_copy(shape, random_state=2)
+    plain = meshcorr.match((shape.vertices, shape.faces), (copy.vertices, copy.faces))
+    result = meshcorr.match((shape.vertices, shape.faces), (copy.vertices, copy.faces), oriented_starts=True)
+    oriented = [c["origin"] for c in result.map_candidates if c["origin"].endswith("-oriented")]
+    assert oriented and not any(c["origin"].endswith("-oriented") for c in plain.map_candidates)
+    assert len(result.map_candidates) > len(plain.map_candidates)
+    assert result.params["oriented_starts"] is True and plain.params["oriented_starts"] is False
+    assert np.mean(result.map == truth) > 0.99
+    paths = []
+    for name, mesh in (("a", shape), ("b", copy)):
+        paths.append(str(tmp_path / f"{name}.off"))
+        trimesh.Trimesh(mesh.vertices, mesh.faces, process=False).export(paths[-1])
+    assert main(["match", *paths, "--oriented-starts", "--json", "-q"]) == 0
+    summary = json.loads(capsys.readouterr().out)
+    assert any(c["origin"].endswith("-oriented") for c in summary["map_candidates"])

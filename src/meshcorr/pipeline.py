@@ -75,7 +75,7 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
           method: str = "spectral", prealign: bool = True,
           symmetry: str = "auto", refine: bool = True, refine_k: int = REFINE_K, shells: bool = True,
           anchor_scale: str = "embedding", landmarks=None, extremities: bool = True,
-          partial: str | None = None, n_landmarks=_RENAMED) -> Correspondence:
+          oriented_starts: bool = False, partial: str | None = None, n_landmarks=_RENAMED) -> Correspondence:
     """Dense vertex correspondence from ``source`` to ``target``.
 
     Parameters
@@ -171,6 +171,16 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         (:mod:`meshcorr.extremities`) and keep the map the whole-map energies
         prefer (:mod:`meshcorr.selection`); needed when the shapes'
         proportions differ. Used with ``symmetry="auto"``.
+    oriented_starts : bool
+        Also turn each tip assignment into a map by an orientation-preserving
+        functional-map fit (:mod:`meshcorr.oriented_start`), not only by
+        distances to the tips. Distances to tips that lie near one plane (a
+        person standing: head, hands and feet) cannot tell front from back;
+        the fit can. Measured better on people of one species (SHREC'07
+        humans) and worse across species (gorilla -> human: the fit turns a
+        mirrored assignment into a map turned front to back that the energies
+        do not always reject), so it is off by default
+        (``benchmarks/RESULTS-robustness.md``). Needs a reliable orientation.
     partial : {None, "source", "target"}
         None: both shapes are whole (they may have small holes).
         ``"source"``: the source is a part of the target (one side of a scan,
@@ -281,6 +291,7 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         choice = _whole_map_choice(
             src, tgt, spectra, chosen.mapping, choice.other, pairs, extremities=extremities, refine=refine,
             refine_k=refine_k, bijective=bijective, reliable=reliable, shells=shell_stage, timer=timer,
+            tip_starts=EXTREMITY_STARTS + (("oriented",) if oriented_starts else ()),
             random_state=random_state)
     local_map, other_map, map_candidates = choice.mapping, choice.other, choice.summaries
     spectral_kept = choice.spectral_kept
@@ -309,6 +320,7 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
                   largest_component=largest_component, random_state=random_state, mode=mode,
                   n_samples=n_samples, max_memory=max_memory, symmetry=symmetry, refine=refine,
                   refine_k=refine_k, shells=shells, anchor_scale=anchor_scale, extremities=extremities,
+                  oriented_starts=oriented_starts,
                   landmarks=None if pairs is None else np.stack([src.kept[pairs[:, 0]], tgt.kept[pairs[:, 1]]],
                                                                 axis=1).tolist())
     return Correspondence(
@@ -408,7 +420,8 @@ class _Choice(NamedTuple):
 
 def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, spectral_other,
                       pairs: np.ndarray | None, *, extremities: bool, refine: bool, refine_k: int,
-                      bijective: bool, reliable: bool, shells: bool, timer: StageTimer, random_state) -> _Choice:
+                      bijective: bool, reliable: bool, shells: bool, timer: StageTimer,
+                      tip_starts: tuple[str, ...] = EXTREMITY_STARTS, random_state) -> _Choice:
     """Candidate maps from extremities and landmarks, scored with the spectral map; the winner.
 
     With ``shells`` on and a reliable orientation, the choice is made between
@@ -422,6 +435,7 @@ def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, s
     """
     with timer.stage("whole-map"):
         g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
+        hows = tuple(dict.fromkeys(tip_starts)) if reliable else ("distances",)  # the first is unnamed
         starts: list[tuple[str, np.ndarray, dict]] = []
         if pairs is not None:
             starts.append(("landmarks", landmark_map(g1, g2, pairs), {}))
@@ -429,11 +443,11 @@ def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, s
             tips = [spectrum_extremities(mesh, spectrum, random_state=random_state)
                     for mesh, spectrum in zip((src, tgt), spectra)]
             for rank, (energy, assignment) in enumerate(match_extremities(*tips)):
-                for how in EXTREMITY_STARTS if reliable else ("distances",):
+                for how in hows:
                     start = (fit_oriented_map(src, tgt, g1, g2, assignment, basis_k=refine_k,
                                               random_state=random_state) if how == "oriented"
                              else landmark_map(g1, g2, assignment))
-                    suffix = "" if how == EXTREMITY_STARTS[0] or not reliable else f"-{how}"
+                    suffix = "" if how == hows[0] else f"-{how}"
                     starts.append((f"extremities-{rank}{suffix}", start, {"extremity_energy": energy}))
         candidates = [MapCandidate("spectral", spectral_map)]
         if spectral_other is not None:  # unrefined: it is kept as the alternative, rarely chosen

@@ -79,6 +79,9 @@ class Settings:
     extremities : bool
         Also try maps started from matched shape extremities and keep the
         one the whole-map energies prefer (with ``symmetry="auto"``).
+    oriented_starts : bool
+        Also start maps from the tips by an orientation-preserving fit
+        (people standing; worse across species).
     partial : {None, "source", "target"}
         Which shape is a part of the other (:mod:`meshcorr.partial`); None:
         both are whole.
@@ -117,6 +120,7 @@ class Settings:
     shells: bool = True
     landmarks: Sequence[tuple[int, int]] | np.ndarray | None = None
     extremities: bool = True
+    oriented_starts: bool = False
     partial: str | None = None
     # the output and the input
     bijective: bool = False

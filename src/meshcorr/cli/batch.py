@@ -62,6 +62,9 @@ def add_parser(sub) -> None:
                    help="ZoomOut refinement (default: on)")
     g.add_argument("--shells", action=argparse.BooleanOptionalAction, default=True,
                    help="smooth-shell alignment after the refinement, meshes only (default: on)")
+    g.add_argument("--oriented-starts", action="store_true",
+                   help="also start maps from the tips by an orientation-preserving fit (people standing; "
+                        "worse across species; default: off)")
     g.add_argument("--mode", choices=MODES, default="auto", help="dense, scalable or auto (default: auto)")
     g.add_argument("--samples", type=int, default=N_SAMPLES, metavar="N",
                    help=f"Nystrom samples of the scalable mode (default: {N_SAMPLES})")
@@ -135,6 +138,8 @@ def run(args) -> int:
     pairs = _pairs(args)
     options = dict(_options(args.set), k=args.k, geodesic=args.geodesic, random_state=args.seed,
                    refine=args.refine, shells=args.shells, mode=args.mode, n_samples=args.samples)
+    if args.oriented_starts:
+        options["oriented_starts"] = True
     if args.partial is not None:
         options["partial"] = args.partial
     client = None

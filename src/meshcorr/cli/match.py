@@ -112,6 +112,10 @@ def add_parser(sub) -> None:
     g.add_argument("--no-extremities", dest="extremities", action="store_false",
                    help="do not try maps started from matched shape extremities (faster; they are "
                         "what holds when the shapes' proportions differ)")
+    g.add_argument("--oriented-starts", action="store_true",
+                   help="also start maps from the matched tips by an orientation-preserving fit: better "
+                        "for people standing (head, hands and feet in one plane cannot tell front from "
+                        "back), worse across species (default: off)")
     g.add_argument("--partial", choices=("source", "target"), default=None,
                    help="SOURCE is a part of TARGET (one side of a scan, a cut, large holes), or the reverse: "
                         "the map covers the part only (with 'target', SOURCE vertices outside the matched "
@@ -210,7 +214,7 @@ def run(args) -> int:
                    method=args.method, prealign=args.prealign, mode=args.mode,
                    n_samples=args.n_samples, max_memory=args.max_memory,
                    scalable_above=args.scalable_above, refine_k=args.refine_k, shells=args.shells, landmarks=landmarks,
-                   extremities=args.extremities, partial=args.partial)
+                   extremities=args.extremities, oriented_starts=args.oriented_starts, partial=args.partial)
     if args.alternative_out and result.alternative_map is None:
         raise ParameterError(f"No alternative map to write to {args.alternative_out}: only the spectral "
                              "method with at least two eigenvector configurations has one.")

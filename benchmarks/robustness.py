@@ -24,7 +24,7 @@ twice the forgiven one, e.g. legs swapped under a right upper body).
 Rows are appended to a CSV as they finish, so an interrupted run resumes;
 ``--report`` writes the Markdown table. Usage::
 
-    nice -n 10 python benchmarks/robustness.py [--quick] [--methods meshcorr pyfm] \\
+    nice -n 10 python benchmarks/robustness.py [--quick] [--methods meshcorr pyfm meshcorr-oriented] \\
         [--out benchmarks/cache/robustness.csv] [--report benchmarks/RESULTS-robustness-table.md]
 
 Needs ``../shared/data`` beside the repository; exits with a message when it
@@ -181,9 +181,9 @@ def run_pair(pair: Pair, methods: list[str]) -> list[dict]:
     rows = []
     for method in methods:
         start = time.perf_counter()
-        if method == "meshcorr":
+        if method.startswith("meshcorr"):  # "meshcorr-oriented": with oriented_starts=True
             extra = {} if landmarks is None else {"landmarks": landmarks}
-            mapping = meshcorr.match(source, target, **extra).map
+            mapping = meshcorr.match(source, target, oriented_starts=method == "meshcorr-oriented", **extra).map
         else:
             mapping = pyfm_map(source, target, landmarks)
         seconds = time.perf_counter() - start
@@ -236,7 +236,9 @@ def markdown(table: list[dict]) -> str:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--methods", nargs="+", default=["meshcorr", "pyfm"], choices=["meshcorr", "pyfm"])
+    parser.add_argument("--methods", nargs="+", default=["meshcorr", "pyfm"],
+                        choices=["meshcorr", "meshcorr-oriented", "pyfm"],
+                        help="meshcorr-oriented: meshcorr with oriented_starts=True (default: meshcorr pyfm)")
     parser.add_argument("--sets", nargs="+", default=None, help="subset of the set names")
     parser.add_argument("--quick", action="store_true", help="at most 8 pairs per set")
     parser.add_argument("--pyfm-pairs", type=int, default=12,

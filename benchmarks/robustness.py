@@ -183,7 +183,9 @@ def run_pair(pair: Pair, methods: list[str]) -> list[dict]:
         start = time.perf_counter()
         if method.startswith("meshcorr"):  # "meshcorr-oriented": with oriented_starts=True
             extra = {} if landmarks is None else {"landmarks": landmarks}
-            mapping = meshcorr.match(source, target, oriented_starts=method == "meshcorr-oriented", **extra).map
+            if method == "meshcorr-oriented":
+                extra["oriented_starts"] = True
+            mapping = meshcorr.match(source, target, **extra).map
         else:
             mapping = pyfm_map(source, target, landmarks)
         seconds = time.perf_counter() - start

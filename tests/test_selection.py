@@ -218,6 +218,8 @@ def test_a_map_with_swapped_legs_is_repaired_from_its_consistent_part(person):
     assert [c.origin for c in added] == ["repaired-legs swapped"]
     # Too little keeps the orientation (a mirror image): nothing to start from.
     assert repair_map(mesh, mesh, mirror, k=30) is None
+    with pytest.raises(ParameterError, match="one target vertex"):
+        repair_map(mesh, mesh, identity[:10], k=30)
 
 
 def test_oriented_starts_add_their_candidates_and_keep_the_permutation(tmp_path, capsys):

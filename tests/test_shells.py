@@ -67,6 +67,9 @@ def test_bad_inputs_are_refused(poses):
     cloud = Mesh(bent.vertices, np.zeros((0, 3), dtype=int))
     with pytest.raises(ParameterError, match="point clouds"):
         shell_refine(rest, cloud, np.arange(rest.n_vertices))
+    for score in (1.5, float("nan"), "high"):
+        with pytest.raises(ParameterError, match="'orientation'"):
+            shell_refine(rest, bent, np.arange(rest.n_vertices), orientation=score)
 
 
 @pytest.fixture(scope="module")
@@ -154,3 +157,25 @@ def test_the_candidates_that_keep_the_orientation_are_judged_after_the_shells(co
     # Without the shells the candidates are judged as ZoomOut leaves them.
     plain = meshcorr.match(source, target, shells=False)
     assert not any("shells" in c for c in plain.map_candidates)
+
+
+def test_a_sheet_without_a_reliable_outside_is_still_aligned():
+    # A flat sheet has no outside: no orientation score is measured for the candidates, and the
+    # shells stage measures the chosen map's own (it is not given a NaN score).
+    import warnings
+
+    import meshcorr
+    from meshcorr.orientation import mesh_orientation
+
+    n = 24
+    x, y = np.meshgrid(np.linspace(-1.0, 1.3, n), np.linspace(-1.0, 1.0, n))
+    vertices = np.c_[x.ravel(), y.ravel(), np.zeros(n * n)]
+    corner = np.arange(n - 1)[:, None] * n + np.arange(n - 1)[None, :]
+    faces = np.concatenate([np.stack([corner, corner + 1, corner + n], -1).reshape(-1, 3),
+                            np.stack([corner + 1, corner + n + 1, corner + n], -1).reshape(-1, 3)])
+    assert not mesh_orientation(Mesh(vertices, faces)).reliable
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the unreliable orientation is warned about
+        result = meshcorr.match((vertices, faces), (vertices * 1.5, faces))
+    assert not result.orientation_reliable and "shells" in result.timings
+    assert np.mean(result.map == np.arange(n * n)) > 0.99

@@ -480,7 +480,7 @@ def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, s
     summaries = [dict(c.to_dict(), chosen=c is chosen, alternative=c is alternative) for c in candidates]
     shelled = bool(chosen.extra.get("shells"))
     return _Choice(mapping, other, summaries, chosen.origin == "spectral" and pairs is None and not shelled,
-                   shelled, chosen.orientation if pairs is None else None)
+                   shelled, chosen.orientation if pairs is None and np.isfinite(chosen.orientation) else None)
 
 
 def _chosen_first(configurations: list[Configuration], chosen: Candidate,

@@ -60,7 +60,7 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
-from ._params import check_int
+from ._params import check_float, check_int
 from .errors import ParameterError
 from .laplacian import vertex_areas
 from .mesh import Mesh
@@ -128,6 +128,7 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
     # at the coarse scales a thin shape's shell fits its reflection nearly as well).
     if orientation is None:
         orientation = orientation_score(source, target, mapping, random_state=random_state)
+    orientation = check_float("orientation", orientation, minimum=0.0, maximum=1.0)
     side = 1.0 if orientation >= 0.5 else -1.0
     # The shells' normals from the outward-facing triangles (a file may come inside out).
     step = _Step(mesh_orientation(source).faces, mesh_orientation(target).faces, sample, weights, landmarks, side)

@@ -175,7 +175,6 @@ def test_the_matching_cost_is_kept_when_the_whole_map_choice_keeps_the_spectral_
     assert pinned.cost is None  # a pinned landmark is no longer the proximity matching's map
 
 
-
 def test_the_orientation_counts_in_the_energy_of_maps_the_shells_refined():
     def candidate(name, orientation, distortion, curvature, before=None):
         extra = {} if before is None else {"shells": 1.0, "zoomout_orientation": before}

@@ -12,6 +12,7 @@ from meshcorr.landmark_map import check_landmarks, landmark_map
 from meshcorr.mesh import Mesh, as_mesh
 from meshcorr.orientation import orientation_score, regional_orientation
 from meshcorr.selection import MapCandidate, choose_map, energy, score_candidates
+from meshcorr.shells import shell_refine
 
 # A left/right symmetric "person" on a sphere: head, two arms, two legs, a nose in front.
 TIPS = {"head": ((0, 0, 1), 0.9), "nose": ((0, 1, 0.2), 0.35), "arm_l": ((1, 0, 0.3), 0.8),
@@ -118,6 +119,31 @@ def test_landmarks_settle_the_left_right_choice(person):
     pairs = [(int(i), int(truth[i])) for i in picks]
     result = meshcorr.match((mesh.vertices, mesh.faces), (target.vertices, target.faces), landmarks=pairs)
     assert np.mean(result.map == truth) > 0.9
+
+
+def test_the_landmarks_distances_join_the_final_shells_and_the_fine_schedule_runs(person, monkeypatch):
+    import meshcorr.pipeline as pipeline
+    from meshcorr.shells import FINE_SCALES
+
+    mesh = person[0]
+    calls = []
+
+    def recording(*args, **kwargs):
+        calls.append(kwargs)
+        return shell_refine(*args, **kwargs)
+
+    monkeypatch.setattr(pipeline, "shell_refine", recording)
+    picks = [_tip_vertex(mesh, n) for n in ("head", "arm_l", "leg_r")]
+    pairs = [(i, i) for i in picks]
+    result = meshcorr.match(mesh, mesh, landmarks=pairs)
+    assert calls and calls[-1]["scales"] == FINE_SCALES
+    described = calls[-1]["descriptors"]
+    assert [d.shape for d in described] == [(mesh.n_vertices, 3)] * 2
+    assert np.allclose(described[0], described[1])  # the same shape: the same distances
+    assert np.mean(result.map == np.arange(mesh.n_vertices)) > 0.99
+    calls.clear()
+    meshcorr.match(mesh, mesh)
+    assert calls and all(c["descriptors"] is None for c in calls)
 
 
 def test_a_shape_against_its_mirror_image_maps_to_the_reflection():

@@ -51,6 +51,33 @@ def test_shells_lower_the_error_of_the_zoomout_map_of_a_bent_pose(poses):
     assert np.array_equal(shelled, shell_refine(rest, bent, zoomed, k=30))  # same seed, same map
 
 
+def test_descriptors_join_the_product_space(poses):
+    # Descriptors that name each vertex (its rest coordinates, heavily weighted) decide the map
+    # from a start that is wrong everywhere: the map is the re-indexing itself.
+    rest = poses[0]
+    order = np.random.default_rng(5).permutation(rest.n_vertices)  # copy vertex j is rest vertex order[j]
+    inverse = np.argsort(order)
+    copy = Mesh(rest.vertices[order], inverse[rest.faces])
+    named = (100.0 * rest.vertices, 100.0 * rest.vertices[order])
+    reversed_start = inverse[::-1].copy()
+    assert np.mean(shell_refine(rest, copy, reversed_start, k=20) == inverse) < 0.5
+    assert np.array_equal(shell_refine(rest, copy, reversed_start, k=20, descriptors=named), inverse)
+
+
+@pytest.mark.parametrize("descriptors, message", [
+    ((np.zeros((3, 2)), np.zeros((3, 2))), "one row per vertex"),
+    ("abc", "pair of"),
+    (lambda n1, n2: (np.zeros((n1, 2)), np.zeros((n2, 3))), "one row per vertex"),
+    (lambda n1, n2: (np.full((n1, 1), np.nan), np.zeros((n2, 1))), "NaN"),
+])
+def test_bad_descriptors_are_refused(poses, descriptors, message):
+    rest, bent = poses
+    if callable(descriptors):
+        descriptors = descriptors(rest.n_vertices, bent.n_vertices)
+    with pytest.raises(ParameterError, match=message):
+        shell_refine(rest, bent, np.arange(rest.n_vertices), k=20, descriptors=descriptors)
+
+
 def test_landmarks_are_held(poses):
     rest, bent = poses
     pairs = np.array([[0, 5], [10, 40]])

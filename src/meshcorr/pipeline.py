@@ -29,7 +29,7 @@ from .curvature import curvature_disagreement
 from .errors import MeshWarning, ParameterError, PartialShapeWarning
 from .extremities import match_extremities, spectrum_extremities
 from .icp import tps_icp
-from .landmark_map import check_landmarks, landmark_map
+from .landmark_map import check_landmarks, landmark_descriptors, landmark_map
 from .mesh import Mesh, MeshLike
 from .methods import METHOD_NAMES, applicable_options, changed_options, reject_inapplicable, run_method
 from .modes import MODES, N_SAMPLES, SCALABLE_ABOVE, resolve_memory, select_mode
@@ -44,7 +44,7 @@ from .reorder import REORDER_MODES, Configuration, rank_configurations
 from .result import Correspondence
 from .repair import repair_candidates
 from .selection import MapCandidate, choose_map, score_candidates, shell_candidates
-from .shells import shell_refine
+from .shells import FINE_SCALES, shell_refine
 from .symmetry import (SYMMETRY_MODES, WIDE_CANDIDATES, Candidate, candidate_ranks, choose, metric_distortion,
                        right_map_missing)
 from .timing import StageProgress, StageTimer
@@ -152,7 +152,9 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         coordinates low-passed to a growing number of Laplace-Beltrami
         functions) by a rigid motion and a smooth deformation, and map in the
         product of that space and the spectral one (:mod:`meshcorr.shells`,
-        after Smooth Shells). Meshes only, with ``refine`` and without
+        after Smooth Shells); the chosen map then once more on a finer
+        schedule (:data:`meshcorr.shells.FINE_SCALES`). With ``landmarks``
+        their geodesic distances join that space. Meshes only, with ``refine`` and without
         ``bijective`` (point clouds, partial shapes and one-to-one maps keep
         the ZoomOut map).
     anchor_scale : {"embedding", "geodesic"}
@@ -165,7 +167,8 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         Vertices the user knows to correspond (0-based, input numbering).
         They start a candidate map of their own, decide among the candidate
         maps (the one that agrees with them wins: this settles the left/right
-        choice) and are mapped exactly (:mod:`meshcorr.selection`).
+        choice), join the descriptors of the smooth-shell alignment (their
+        geodesic distances) and are mapped exactly (:mod:`meshcorr.selection`).
     extremities : bool
         Also try maps started from matched shape extremities
         (:mod:`meshcorr.extremities`) and keep the map the whole-map energies
@@ -286,19 +289,27 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
     # Whole-map choice: the spectral map against maps from matched extremities
     # and from the user's landmarks, each refined alike (meshcorr.selection).
     shell_stage = refine and shells and not bijective and not (src.is_cloud or tgt.is_cloud)
+    # The landmarks' geodesic distances, a further coordinate of the shells' product space.
+    described = None if pairs is None or not shell_stage else tuple(
+        landmark_descriptors(spectrum.geodesics_from, ends) for spectrum, ends in zip(spectra, pairs.T))
     choice = _Choice(chosen.mapping, None if other is None else other.mapping, [])
     if symmetry == "auto" and (extremities or pairs is not None):  # stages "whole-map" and "shells"
         choice = _whole_map_choice(
             src, tgt, spectra, chosen.mapping, choice.other, pairs, extremities=extremities, refine=refine,
             refine_k=refine_k, bijective=bijective, reliable=reliable, shells=shell_stage, timer=timer,
-            tip_starts=EXTREMITY_STARTS + (("oriented",) if oriented_starts else ()),
+            described=described, tip_starts=EXTREMITY_STARTS + (("oriented",) if oriented_starts else ()),
             random_state=random_state)
     local_map, other_map, map_candidates = choice.mapping, choice.other, choice.summaries
     spectral_kept = choice.spectral_kept
-    if shell_stage and not choice.shelled:
+    if shell_stage:
         with timer.stage("shells"):  # meshcorr.shells: extrinsic alignment of the chosen map
-            local_map = shell_refine(src, tgt, local_map, k=refine_k, landmarks=pairs,
-                                     orientation=choice.orientation, random_state=random_state)
+            if not choice.shelled:
+                local_map = shell_refine(src, tgt, local_map, k=refine_k, landmarks=pairs, descriptors=described,
+                                         orientation=choice.orientation, random_state=random_state)
+            # Then the finer schedule on the chosen map alone (meshcorr.shells.FINE_SCALES).
+            local_map = shell_refine(src, tgt, local_map, k=refine_k, landmarks=pairs, descriptors=described,
+                                     orientation=choice.orientation, scales=FINE_SCALES,
+                                     random_state=random_state)
         spectral_kept = False
     icp, anchors = chosen.extra["icp"], chosen.extra["anchors"]
 
@@ -421,6 +432,7 @@ class _Choice(NamedTuple):
 def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, spectral_other,
                       pairs: np.ndarray | None, *, extremities: bool, refine: bool, refine_k: int,
                       bijective: bool, reliable: bool, shells: bool, timer: StageTimer,
+                      described: tuple[np.ndarray, np.ndarray] | None = None,
                       tip_starts: tuple[str, ...] = EXTREMITY_STARTS, random_state) -> _Choice:
     """Candidate maps from extremities and landmarks, scored with the spectral map; the winner.
 
@@ -470,7 +482,8 @@ def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, s
             repaired = repair_candidates(candidates, src, tgt, k=refine_k, random_state=random_state)
             score_candidates(repaired, src, tgt, g1, g2, **scored)
             candidates += repaired
-            final = shell_candidates(candidates, src, tgt, k=refine_k, landmarks=pairs, random_state=random_state)
+            final = shell_candidates(candidates, src, tgt, k=refine_k, landmarks=pairs, descriptors=described,
+                                     random_state=random_state)
             score_candidates(final, src, tgt, g1, g2, **scored)
     chosen, alternative = choose_map(candidates, reliable=reliable)
     mapping = chosen.mapping.copy()

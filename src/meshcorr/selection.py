@@ -242,7 +242,8 @@ def energy(candidate: MapCandidate, reliable: bool) -> float:
 
 
 def shell_candidates(candidates: list[MapCandidate], source, target, *, k: int,
-                     landmarks: np.ndarray | None = None, random_state: int | None = 0) -> list[MapCandidate]:
+                     landmarks: np.ndarray | None = None, descriptors=None,
+                     random_state: int | None = 0) -> list[MapCandidate]:
     """Refine the candidates that keep the orientation by :func:`meshcorr.shells.shell_refine`, in place.
 
     Parameters
@@ -270,8 +271,9 @@ def shell_candidates(candidates: list[MapCandidate], source, target, *, k: int,
     chosen = [c for c in candidates if c.orientation >= 0.5]
 
     def shelled(candidate: MapCandidate) -> np.ndarray:
-        pins = landmarks if candidate.origin == "landmarks" else None
-        return shell_refine(source, target, candidate.mapping, k=k, landmarks=pins,
+        held = candidate.origin == "landmarks"
+        return shell_refine(source, target, candidate.mapping, k=k, landmarks=landmarks if held else None,
+                            descriptors=descriptors if held else None,
                             orientation=candidate.orientation, random_state=random_state)
 
     for candidate, mapping in zip(chosen, parallel_map(shelled, chosen)):  # one thread per core

@@ -38,7 +38,11 @@ For :math:`k = k_0 < \\dots < K`, given the current map :math:`T`:
   product space
   :math:`[\\,Y,\\; w_n\\, n(Y),\\; w_s\\, \\Phi_1^{(k)} C_k\\,]` against
   :math:`[\\,X_2^{(k)},\\; w_n\\, n(X_2^{(k)}),\\; w_s\\, \\Phi_2^{(k)}\\,]`,
-  with :math:`n(\\cdot)` the vertex normals of a shell.
+  with :math:`n(\\cdot)` the vertex normals of a shell. Given descriptors
+  that should agree at corresponding points (the geodesic distances to the
+  user's landmarks), they join both sides with weight :data:`DESCRIPTOR_WEIGHT`,
+  as landmark distances join a functional map's descriptors (Ovsjanikov et
+  al., "Functional maps", SIGGRAPH 2012, section 6).
 
 A last step does the same with the coordinates themselves (:math:`k = K`,
 no low pass). Unlike Smooth Shells this uses hard nearest-neighbour
@@ -58,21 +62,28 @@ every set the error from the same start drops by 20-30 % (TOSCA 5k
 from __future__ import annotations
 
 import numpy as np
-import trimesh
 
 from ._params import check_float, check_int
 from .errors import ParameterError
 from .laplacian import vertex_areas
 from .mesh import Mesh
-from .orientation import mesh_orientation, orientation_score
+from .orientation import mesh_orientation, orientation_score, vertex_normals
 from .refine import _basis_size, check_vertex_map, nearest_vertices, orthogonal_fit, pair_bases
 
 #: Weight of the shells' unit normals against coordinates of a unit-area shape.
 NORMAL_WEIGHT = 0.3
 #: Weight of the spectral coordinates (unit-area normalised eigenfunctions).
 SPECTRAL_WEIGHT = 0.1
+#: Weight of the landmark-distance descriptors (distances over their mean), when landmarks are given.
+DESCRIPTOR_WEIGHT = 0.3
 #: Basis sizes of the coarse-to-fine steps (clipped to the basis size).
 SCALES = (8, 12, 16, 24, 32, 40)
+#: A finer schedule, run by the pipeline on the chosen map after :data:`SCALES`: more, smaller steps
+#: let the deformation follow proportions that differ (gorilla -> human 0.096 -> 0.083 forgiving flips,
+#: every one of 10 development pairs lower; ``benchmarks/RESULTS-robustness-trials.md``). Run on
+#: every candidate instead it refines more but makes wrong candidates look right (one gorilla pair
+#: chose a map of error 0.81), hence only on the winner.
+FINE_SCALES = tuple(range(16, 41, 2))
 #: Source vertices sampled for the coarse steps (all of them below this).
 N_SAMPLE = 1000
 
@@ -80,6 +91,7 @@ N_SAMPLE = 1000
 def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40,
                  scales: tuple[int, ...] = SCALES, n_sample: int = N_SAMPLE,
                  landmarks: np.ndarray | None = None, orientation: float | None = None,
+                 descriptors: tuple[np.ndarray, np.ndarray] | None = None,
                  random_state: int | None = 0) -> np.ndarray:
     """Refine a vertex map by aligning the shapes' smooth shells (module docstring).
 
@@ -103,6 +115,11 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
         The given map's :func:`~meshcorr.orientation.orientation_score` with
         the same ``random_state``, when the caller has it (it decides between
         a rotation and a reflection); measured here when None.
+    descriptors : ((n1, d), (n2, d)) float, optional
+        Descriptors that should agree at corresponding vertices (the
+        pipeline's: geodesic distances to the user's landmarks divided by
+        their mean, :func:`meshcorr.landmark_map.landmark_descriptors`),
+        appended to the product space with weight :data:`DESCRIPTOR_WEIGHT`.
     random_state : int or None
         Seed of the bases' start vectors and of the sample.
 
@@ -117,6 +134,8 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
     n1 = source.n_vertices
     mapping = check_vertex_map(mapping, source, target).astype(np.int64)  # a copy, refined in place
     n_sample = check_int("n_sample", n_sample, minimum=1)
+    if descriptors is not None:
+        descriptors = _checked_descriptors(descriptors, n1, target.n_vertices)
     k = _basis_size(k, source, target)
     scales = tuple(s for s in scales if s < k)
     phi1, phi2 = pair_bases(source, target, k, random_state=random_state)
@@ -131,31 +150,67 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
     orientation = check_float("orientation", orientation, minimum=0.0, maximum=1.0)
     side = 1.0 if orientation >= 0.5 else -1.0
     # The shells' normals from the outward-facing triangles (a file may come inside out).
-    step = _Step(mesh_orientation(source).faces, mesh_orientation(target).faces, sample, weights, landmarks, side)
+    step = _Step(mesh_orientation(source).faces, sample, weights, landmarks, side, descriptors)
+    faces2 = mesh_orientation(target).faces
     for size in scales:
-        p1, p2 = phi1[:, :size], phi2[:, :size]
-        mapping[sample] = step(p1, p2, _low_pass(p1, m1, x1), _low_pass(p2, m2, x2), mapping, sample)
-    mapping = step(phi1, phi2, x1, x2, mapping, np.arange(n1))
+        p1 = phi1[:, :size]
+        points = _shell_points(target, phi2, m2, x2, faces2, size, random_state)
+        mapping[sample] = step(p1, phi2[:, :size], _low_pass(p1, m1, x1), points, mapping, sample)
+    points = _shell_points(target, phi2, m2, x2, faces2, k, random_state, low_pass=False)
+    mapping = step(phi1, phi2, x1, points, mapping, np.arange(n1))
     return step.pin(mapping)
+
+
+def _checked_descriptors(descriptors, n1: int, n2: int) -> tuple[np.ndarray, np.ndarray]:
+    """The two descriptor arrays as float64, checked: one finite row per vertex, as many columns."""
+    try:
+        F1, F2 = (np.asarray(d, dtype=np.float64) for d in descriptors)
+    except (TypeError, ValueError) as exc:
+        raise ParameterError(f"descriptors must be a pair of (n, d) arrays of numbers: {exc}") from None
+    if F1.ndim != 2 or F2.ndim != 2 or len(F1) != n1 or len(F2) != n2 or F1.shape[1] != F2.shape[1]:
+        raise ParameterError(f"descriptors must be ({n1}, d) and ({n2}, d) arrays, one row per vertex of the "
+                             f"source and of the target; got {F1.shape} and {F2.shape}.")
+    if not (np.isfinite(F1).all() and np.isfinite(F2).all()):
+        raise ParameterError("descriptors hold NaN or infinite values.")
+    return F1, F2
+
+
+def _shell_points(target: Mesh, basis: np.ndarray, mass: np.ndarray, coords: np.ndarray, faces: np.ndarray,
+                  size: int, random_state, *, low_pass: bool = True) -> np.ndarray:
+    """The target's side of the product space at one scale: ``[X2, w_n n(X2), w_s Phi2]``, cached.
+
+    The same for every map refined onto this target (the pipeline refines several candidates),
+    so it is kept on the mesh, keyed on the basis (size, seed) and the weights.
+    """
+    key = ("shell-points", basis.shape[1], size, low_pass, random_state, NORMAL_WEIGHT, SPECTRAL_WEIGHT)
+    if key not in target._cache:
+        phi = basis[:, :size]
+        shell = _low_pass(phi, mass, coords) if low_pass else coords
+        points = np.hstack([shell, NORMAL_WEIGHT * _normals(shell, faces), SPECTRAL_WEIGHT * phi])
+        points.flags.writeable = False
+        target._cache[key] = points
+    return target._cache[key]
 
 
 class _Step:
     """One coarse-to-fine step: deform the source shell, fit C, map ``rows`` in the product space."""
 
-    def __init__(self, faces1: np.ndarray, faces2: np.ndarray, sample: np.ndarray, weights: np.ndarray,
-                 landmarks: np.ndarray | None, side: float) -> None:
-        self.faces1, self.faces2, self.sample, self.weights, self.side = faces1, faces2, sample, weights, side
+    def __init__(self, faces1: np.ndarray, sample: np.ndarray, weights: np.ndarray,
+                 landmarks: np.ndarray | None, side: float, descriptors=None) -> None:
+        self.faces1, self.sample, self.weights, self.side = faces1, sample, weights, side
         self.landmarks = None if landmarks is None or len(landmarks) == 0 else np.asarray(landmarks)
+        self.descriptors = descriptors
 
     def pin(self, mapping: np.ndarray) -> np.ndarray:
         if self.landmarks is not None:
             mapping[self.landmarks[:, 0]] = self.landmarks[:, 1]
         return mapping
 
-    def __call__(self, p1: np.ndarray, p2: np.ndarray, shell1: np.ndarray, shell2: np.ndarray,
+    def __call__(self, p1: np.ndarray, p2: np.ndarray, shell1: np.ndarray, points: np.ndarray,
                  mapping: np.ndarray, rows: np.ndarray) -> np.ndarray:
         s = self.sample
         images = self.pin(mapping.copy())[s]
+        shell2 = points[:, :3]
         # A rigid motion first (the low-passed displacement of a rotation is not the rotation at
         # full resolution), then the smooth deformation: the displacement the map still asks for,
         # projected on the k functions (mass-weighted, estimated on the sample).
@@ -163,10 +218,12 @@ class _Step:
         moved = _rigid(shell1[s], shell2[images], self.weights, side)(shell1)
         deformed = moved + p1 @ (p1[s].T @ (self.weights[:, None] * (shell2[images] - moved[s])))
         C = orthogonal_fit(p1[s], p2[images])  # Phi1 C ~ Phi2[T]
-        queries = np.hstack([deformed[rows], side * NORMAL_WEIGHT * _normals(deformed, self.faces1)[rows],
-                             SPECTRAL_WEIGHT * p1[rows] @ C])
-        points = np.hstack([shell2, NORMAL_WEIGHT * _normals(shell2, self.faces2), SPECTRAL_WEIGHT * p2])
-        return nearest_vertices(queries, points)
+        queries = [deformed[rows], side * NORMAL_WEIGHT * _normals(deformed, self.faces1)[rows],
+                   SPECTRAL_WEIGHT * p1[rows] @ C]
+        if self.descriptors is not None:  # the landmarks' distances (pipeline: the user's landmarks)
+            queries.append(DESCRIPTOR_WEIGHT * self.descriptors[0][rows])
+            points = np.hstack([points, DESCRIPTOR_WEIGHT * self.descriptors[1]])
+        return nearest_vertices(np.hstack(queries), points)
 
 
 def _rigid(points: np.ndarray, onto: np.ndarray, weights: np.ndarray, side: float):
@@ -196,5 +253,5 @@ def _low_pass(basis: np.ndarray, mass: np.ndarray, coords: np.ndarray) -> np.nda
 
 
 def _normals(coords: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Area-weighted unit vertex normals of a shell (trimesh)."""
-    return trimesh.Trimesh(coords, faces, process=False).vertex_normals
+    """Area-weighted unit vertex normals of a shell (:func:`meshcorr.orientation.vertex_normals`)."""
+    return vertex_normals(coords, faces)[0]

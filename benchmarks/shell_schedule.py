@@ -4,7 +4,8 @@ For 10 pairs of each chosen set of ``benchmarks/robustness.py`` (spread evenly),
 ``meshcorr.match`` with each variant of the final smooth-shell stage and reports the mean error
 (flips counted and forgiven), full flips and partial swaps per set and variant:
 
-- ``before``: the shells on the candidates (:data:`meshcorr.shells.SCALES`), nothing after the choice;
+- ``before``: the shells on the candidates (:data:`meshcorr.shells.SCALES`), nothing after the choice
+  (the landmark distances kept: they join the landmark candidate's shells);
 - ``adopted``: the library as it is: then the chosen map once more on
   :data:`meshcorr.shells.FINE_SCALES`, and the user's landmark distances in the product space;
 - ``no-descriptors``: adopted without the landmark distances (differs only with landmarks);

@@ -154,9 +154,9 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
     faces2 = mesh_orientation(target).faces
     for size in scales:
         p1 = phi1[:, :size]
-        points = _shell_points(target, phi2, m2, x2, faces2, size, random_state)
+        points = _shell_points(phi2, m2, x2, faces2, size)
         mapping[sample] = step(p1, phi2[:, :size], _low_pass(p1, m1, x1), points, mapping, sample)
-    points = _shell_points(target, phi2, m2, x2, faces2, k, random_state, low_pass=False)
+    points = _shell_points(phi2, m2, x2, faces2, k, low_pass=False)
     mapping = step(phi1, phi2, x1, points, mapping, np.arange(n1))
     return step.pin(mapping)
 
@@ -175,21 +175,12 @@ def _checked_descriptors(descriptors, n1: int, n2: int) -> tuple[np.ndarray, np.
     return F1, F2
 
 
-def _shell_points(target: Mesh, basis: np.ndarray, mass: np.ndarray, coords: np.ndarray, faces: np.ndarray,
-                  size: int, random_state, *, low_pass: bool = True) -> np.ndarray:
-    """The target's side of the product space at one scale: ``[X2, w_n n(X2), w_s Phi2]``, cached.
-
-    The same for every map refined onto this target (the pipeline refines several candidates),
-    so it is kept on the mesh, keyed on the basis (size, seed) and the weights.
-    """
-    key = ("shell-points", basis.shape[1], size, low_pass, random_state, NORMAL_WEIGHT, SPECTRAL_WEIGHT)
-    if key not in target._cache:
-        phi = basis[:, :size]
-        shell = _low_pass(phi, mass, coords) if low_pass else coords
-        points = np.hstack([shell, NORMAL_WEIGHT * _normals(shell, faces), SPECTRAL_WEIGHT * phi])
-        points.flags.writeable = False
-        target._cache[key] = points
-    return target._cache[key]
+def _shell_points(basis: np.ndarray, mass: np.ndarray, coords: np.ndarray, faces: np.ndarray, size: int, *,
+                  low_pass: bool = True) -> np.ndarray:
+    """The target's side of the product space at one scale: ``[X2, w_n n(X2), w_s Phi2]``."""
+    phi = basis[:, :size]
+    shell = _low_pass(phi, mass, coords) if low_pass else coords
+    return np.hstack([shell, NORMAL_WEIGHT * _normals(shell, faces), SPECTRAL_WEIGHT * phi])
 
 
 class _Step:
@@ -199,7 +190,7 @@ class _Step:
                  landmarks: np.ndarray | None, side: float, descriptors=None) -> None:
         self.faces1, self.sample, self.weights, self.side = faces1, sample, weights, side
         self.landmarks = None if landmarks is None or len(landmarks) == 0 else np.asarray(landmarks)
-        self.descriptors = descriptors
+        self.descriptors = None if descriptors is None else tuple(DESCRIPTOR_WEIGHT * d for d in descriptors)
 
     def pin(self, mapping: np.ndarray) -> np.ndarray:
         if self.landmarks is not None:
@@ -221,8 +212,8 @@ class _Step:
         queries = [deformed[rows], side * NORMAL_WEIGHT * _normals(deformed, self.faces1)[rows],
                    SPECTRAL_WEIGHT * p1[rows] @ C]
         if self.descriptors is not None:  # the landmarks' distances (pipeline: the user's landmarks)
-            queries.append(DESCRIPTOR_WEIGHT * self.descriptors[0][rows])
-            points = np.hstack([points, DESCRIPTOR_WEIGHT * self.descriptors[1]])
+            queries.append(self.descriptors[0][rows])
+            points = np.hstack([points, self.descriptors[1]])
         return nearest_vertices(np.hstack(queries), points)
 
 

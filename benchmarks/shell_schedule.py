@@ -35,7 +35,9 @@ import meshcorr
 import meshcorr.pipeline as pipeline
 import meshcorr.selection as selection
 import meshcorr.shells as shells
-from robustness import DATA, GeodesicCache, _spread, as_mesh, build_sets, score, truth_landmarks
+from meshcorr.evaluation import GeodesicCache
+from meshcorr.mesh import as_mesh
+from robustness import DATA, _spread, build_sets, score, truth_landmarks
 
 VARIANTS = ("before", "adopted", "no-descriptors", "fine-from-6", "fine-every-candidate")
 DENSE = tuple(range(6, 41, 2))

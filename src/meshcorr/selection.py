@@ -242,7 +242,8 @@ def energy(candidate: MapCandidate, reliable: bool) -> float:
 
 
 def shell_candidates(candidates: list[MapCandidate], source, target, *, k: int,
-                     landmarks: np.ndarray | None = None, descriptors=None,
+                     landmarks: np.ndarray | None = None,
+                     descriptors: tuple[np.ndarray, np.ndarray] | None = None,
                      random_state: int | None = 0) -> list[MapCandidate]:
     """Refine the candidates that keep the orientation by :func:`meshcorr.shells.shell_refine`, in place.
 
@@ -257,6 +258,9 @@ def shell_candidates(candidates: list[MapCandidate], source, target, *, k: int,
     landmarks : (L, 2) int, optional
         User landmark pairs: held by the ``"landmarks"`` candidate only (the
         others must show by themselves whether they agree with them).
+    descriptors : ((n1, d), (n2, d)) float, optional
+        The landmarks' geodesic distances (:func:`meshcorr.shells.shell_refine`),
+        used by the ``"landmarks"`` candidate only, like the pins.
     random_state : int or None
 
     Returns

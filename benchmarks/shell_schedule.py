@@ -4,19 +4,19 @@ For 10 pairs of each chosen set of ``benchmarks/robustness.py`` (spread evenly),
 ``meshcorr.match`` with each variant of the final smooth-shell stage and reports the mean error
 (flips counted and forgiven), full flips and partial swaps per set and variant:
 
-- ``before``: the shells on the candidates (:data:`meshcorr.shells.SCALES`), nothing after the choice
-  (the landmark distances kept: they join the landmark candidate's shells);
-- ``adopted``: the library as it is: then the chosen map once more on
-  :data:`meshcorr.shells.FINE_SCALES`, and the user's landmark distances in the product space;
+- ``adopted``: the library as it is: every candidate that keeps the orientation aligned on
+  :data:`meshcorr.shells.SCALES` (6, 8, ..., 40), the user's landmark distances in the landmark
+  candidate's product space;
 - ``no-descriptors``: adopted without the landmark distances (differs only with landmarks);
-- ``fine-from-6``: the finer schedule started at 6 functions instead of 16;
-- ``fine-every-candidate``: no second pass, but every candidate refined on the finer schedule
-  (6 to 40 by 2) before the choice.
+- ``coarse``: the candidates on the former coarse schedule (8, 12, 16, 24, 32, 40).
+
+The former default (``coarse`` followed by 16, 18, ..., 40 on the chosen map alone) is commit
+82c3a90; its full-set figures are in ``RESULTS-robustness.md``.
 
 Usage::
 
     nice -n 5 python benchmarks/shell_schedule.py [--sets tosca-noniso tosca-noniso+5 ...] \\
-        [--variants before adopted ...] [--pairs 10] [--workers 2]
+        [--variants adopted coarse ...] [--pairs 10] [--workers 2]
 
 Each pair runs in a worker process (``--workers``). Needs ``../shared/data``; exits with a message
 when it is absent.
@@ -39,33 +39,23 @@ from meshcorr.evaluation import GeodesicCache
 from meshcorr.mesh import as_mesh
 from robustness import DATA, _spread, build_sets, score, truth_landmarks
 
-VARIANTS = ("before", "adopted", "no-descriptors", "fine-from-6", "fine-every-candidate")
-DENSE = tuple(range(6, 41, 2))
+VARIANTS = ("adopted", "no-descriptors", "coarse")
+COARSE = (8, 12, 16, 24, 32, 40)
 
 
 def apply(variant: str) -> None:
     """Patch this worker process's meshcorr into ``variant`` (module docstring)."""
     original = shells.shell_refine
 
-    def second_pass(source, target, mapping, **kwargs):
-        if kwargs.get("scales") is shells.FINE_SCALES:  # the pipeline's second pass
-            if variant in ("before", "fine-every-candidate"):
-                return np.asarray(mapping).copy()
-            if variant == "fine-from-6":
-                kwargs["scales"] = DENSE
+    def patched(source, target, mapping, **kwargs):
+        if variant == "coarse":
+            kwargs["scales"] = COARSE
         if variant == "no-descriptors":
             kwargs["descriptors"] = None
         return original(source, target, mapping, **kwargs)
 
-    def every_candidate(source, target, mapping, **kwargs):
-        if variant == "fine-every-candidate":
-            kwargs["scales"] = DENSE
-        if variant == "no-descriptors":
-            kwargs["descriptors"] = None
-        return original(source, target, mapping, **kwargs)
-
-    pipeline.shell_refine = second_pass
-    selection.shell_refine = every_candidate
+    pipeline.shell_refine = patched
+    selection.shell_refine = patched
 
 
 def run(job: tuple[str, int, str]) -> dict:

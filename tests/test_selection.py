@@ -121,9 +121,10 @@ def test_landmarks_settle_the_left_right_choice(person):
     assert np.mean(result.map == truth) > 0.9
 
 
-def test_the_landmarks_distances_join_the_final_shells_and_the_fine_schedule_runs(person, monkeypatch):
+def test_the_landmarks_distances_join_the_shells_on_the_fine_schedule(person, monkeypatch):
     import meshcorr.pipeline as pipeline
-    from meshcorr.shells import FINE_SCALES
+    import meshcorr.selection as selection
+    from meshcorr.shells import SCALES
 
     mesh = person[0]
     calls = []
@@ -133,17 +134,22 @@ def test_the_landmarks_distances_join_the_final_shells_and_the_fine_schedule_run
         return shell_refine(*args, **kwargs)
 
     monkeypatch.setattr(pipeline, "shell_refine", recording)
+    monkeypatch.setattr(selection, "shell_refine", recording)
+    assert SCALES == tuple(range(6, 41, 2))
     picks = [_tip_vertex(mesh, n) for n in ("head", "arm_l", "leg_r")]
     pairs = [(i, i) for i in picks]
     result = meshcorr.match(mesh, mesh, landmarks=pairs)
-    assert calls and calls[-1]["scales"] == FINE_SCALES
-    described = calls[-1]["descriptors"]
-    assert [d.shape for d in described] == [(mesh.n_vertices, 3)] * 2
-    assert np.allclose(described[0], described[1])  # the same shape: the same distances
+    assert calls and all("scales" not in c for c in calls)  # every candidate on the default schedule
+    held = [c for c in calls if c.get("landmarks") is not None]
+    assert held
+    for call in held:
+        described = call["descriptors"]
+        assert [d.shape for d in described] == [(mesh.n_vertices, 3)] * 2
+        assert np.allclose(described[0], described[1])  # the same shape: the same distances
     assert np.mean(result.map == np.arange(mesh.n_vertices)) > 0.99
     calls.clear()
     meshcorr.match(mesh, mesh)
-    assert calls and all(c["descriptors"] is None for c in calls)
+    assert calls and all(c.get("descriptors") is None for c in calls)
 
 
 def test_a_shape_against_its_mirror_image_maps_to_the_reflection():

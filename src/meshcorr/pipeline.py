@@ -44,7 +44,7 @@ from .reorder import REORDER_MODES, Configuration, rank_configurations
 from .result import Correspondence
 from .repair import repair_candidates
 from .selection import MapCandidate, choose_map, score_candidates, shell_candidates
-from .shells import FINE_SCALES, shell_refine
+from .shells import shell_refine
 from .symmetry import (SYMMETRY_MODES, WIDE_CANDIDATES, Candidate, candidate_ranks, choose, metric_distortion,
                        right_map_missing)
 from .timing import StageProgress, StageTimer
@@ -152,9 +152,9 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         coordinates low-passed to a growing number of Laplace-Beltrami
         functions) by a rigid motion and a smooth deformation, and map in the
         product of that space and the spectral one (:mod:`meshcorr.shells`,
-        after Smooth Shells); the chosen map then once more on a finer
-        schedule (:data:`meshcorr.shells.FINE_SCALES`). With ``landmarks``
-        their geodesic distances join that space. Meshes only, with ``refine`` and without
+        after Smooth Shells), on a schedule of small steps
+        (:data:`meshcorr.shells.SCALES`). With ``landmarks`` their geodesic
+        distances join that space. Meshes only, with ``refine`` and without
         ``bijective`` (point clouds, partial shapes and one-to-one maps keep
         the ZoomOut map).
     anchor_scale : {"embedding", "geodesic"}
@@ -306,10 +306,6 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
             if not choice.shelled:
                 local_map = shell_refine(src, tgt, local_map, k=refine_k, landmarks=pairs, descriptors=described,
                                          orientation=choice.orientation, random_state=random_state)
-            # Then the finer schedule on the chosen map alone (meshcorr.shells.FINE_SCALES).
-            local_map = shell_refine(src, tgt, local_map, k=refine_k, landmarks=pairs, descriptors=described,
-                                     orientation=choice.orientation, scales=FINE_SCALES,
-                                     random_state=random_state)
         spectral_kept = False
     icp, anchors = chosen.extra["icp"], chosen.extra["anchors"]
 

@@ -76,14 +76,11 @@ NORMAL_WEIGHT = 0.3
 SPECTRAL_WEIGHT = 0.1
 #: Weight of the landmark-distance descriptors (distances over their mean), when landmarks are given.
 DESCRIPTOR_WEIGHT = 0.3
-#: Basis sizes of the coarse-to-fine steps (clipped to the basis size).
-SCALES = (8, 12, 16, 24, 32, 40)
-#: A finer schedule, run by the pipeline on the chosen map after :data:`SCALES`: more, smaller steps
-#: let the deformation follow proportions that differ (gorilla -> human 0.096 -> 0.083 forgiving flips,
-#: every one of 10 development pairs lower; ``benchmarks/RESULTS-robustness-trials.md``). Run on
-#: every candidate instead it refines more but makes wrong candidates look right (one gorilla pair
-#: chose a map of error 0.81), hence only on the winner.
-FINE_SCALES = tuple(range(16, 41, 2))
+#: Basis sizes of the coarse-to-fine steps (clipped to the basis size): small, even steps let the
+#: deformation follow proportions that differ (on 30 gorilla -> human pairs 0.125 -> 0.114 against a
+#: coarser schedule 8, 12, 16, 24, 32, 40 followed by 16..40 on the chosen map alone;
+#: ``benchmarks/RESULTS-robustness-trials.md``).
+SCALES = tuple(range(6, 41, 2))
 #: Source vertices sampled for the coarse steps (all of them below this).
 N_SAMPLE = 1000
 

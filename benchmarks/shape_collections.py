@@ -10,7 +10,10 @@ ordered pairs:
     (cluster start, preparation, every pair, summary), with 2 and then 1
     worker processes: wall seconds and seconds per map;
 (c) pyFM's automatic pipeline (``benchmarks/tosca_symmetry.py::pyfm_map``) on
-    ``--pyfm-pairs`` sampled pairs, in this process: seconds per map.
+    ``--pyfm-pairs`` sampled pairs, in this process: seconds per map;
+(d) ``meshcorr batch --all-pairs --hub auto`` on 2 workers: the 2(n-1) maps to
+    and from the spectral medoid matched, the others composed through it
+    (:mod:`meshcorr.consistency`): wall seconds per map and the maps' error.
 
 Also: seconds to prepare one shape and to match one prepared pair (medians,
 in this process), the mean geodesic error against TOSCA's ground truth of
@@ -56,11 +59,11 @@ def _sample(pairs: list, n: int, seed: int) -> list:
     return [pairs[i] for i in np.sort(rng.choice(len(pairs), size=min(n, len(pairs)), replace=False))]
 
 
-def _batch_cli(shapes: list[Path], out: Path, workers: int) -> float:
+def _batch_cli(shapes: list[Path], out: Path, workers: int, *extra: str) -> float:
     shutil.rmtree(out, ignore_errors=True)
     start = time.perf_counter()
     subprocess.run([sys.executable, "-m", "meshcorr", "batch", "--all-pairs", *map(str, shapes), "--out", str(out),
-                    "--workers", str(workers), "-q"], check=True)
+                    "--workers", str(workers), "-q", *extra], check=True)
     return time.perf_counter() - start
 
 
@@ -121,6 +124,14 @@ def main() -> int:
                                               "mean_pair_cpu_s": float(np.mean(cpu)),
                                               "failed": summary["n_failed"], "load_average": os.getloadavg()[0]}
         print(f"batch, {workers} workers: {wall:.1f} s, {wall / len(pairs):.3f} s per map", file=sys.stderr)
+    # (d) the same collection through the automatic hub.
+    wall = _batch_cli(paths, args.out / "hub", 2, "--hub", "auto")
+    summary = json.loads((args.out / "hub" / "summary.json").read_text())
+    hub_auto = {Path(r["via"]).stem for r in summary["pairs"] if r.get("via")}
+    report["batch_hub_auto_2_workers"] = {"wall_s": wall, "per_map_s": wall / len(pairs), "hub": sorted(hub_auto),
+                                          "failed": summary["n_failed"]}
+    print(f"batch through the hub {sorted(hub_auto)}, 2 workers: {wall:.1f} s, {wall / len(pairs):.3f} s per map",
+          file=sys.stderr)
     batch_dir = args.out / "batch2" / "maps"
     same_12 = all(np.array_equal(read_map(batch_dir / map_name(a, b)),
                                  read_map(args.out / "batch1" / "maps" / map_name(a, b))) for a, b in pairs)
@@ -188,6 +199,10 @@ def main() -> int:
         report["pyfm"]["mean_error"] = float(np.mean(list(pyfm_errors.values())))
         report["pyfm"]["meshcorr_mean_error_same_pairs"] = float(np.mean([errors[k] for k in pyfm_maps]))
     triples = sample_triples(names, maps, 40, args.seed)
+    hub_maps = {(Path(a).stem, Path(b).stem): read_map(args.out / "hub" / "maps" / map_name(a, b)) for a, b in pairs}
+    report["batch_hub_auto_2_workers"]["mean_error"] = float(np.mean(list(
+        _truth_errors(hub_maps, meshes, args.data, args.gt_points, args.seed).values())))
+    report["cycle_error_hub_auto"] = float(cycle_errors(hub_maps, meshes, triples).mean())
     report["cycle_error_direct"] = float(cycle_errors(maps, meshes, triples).mean())
     report["cycle_error_hub"] = float(cycle_errors(consistent, meshes, triples).mean())
     report["n_triples"] = len(triples)

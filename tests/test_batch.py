@@ -15,7 +15,8 @@ import meshcorr
 from meshcorr import datasets as ds
 from meshcorr.collection import all_pairs, batch, map_name, read_pairs, template_pairs
 from meshcorr.cli import main
-from meshcorr.consistency import choose_hub, cycle_errors, sample_triples, through_hub
+from meshcorr.consistency import (choose_hub, cycle_errors, sample_triples, shape_dna, spectral_medoid,
+                                  through_hub)
 from meshcorr.errors import MeshcorrError, ParameterError
 from meshcorr.io import read_map
 
@@ -61,7 +62,7 @@ def test_all_pairs_batch_gives_the_per_pair_maps(cluster, shapes, tmp_path):
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["n_pairs"] == 12 and summary["n_failed"] == 0
     assert (tmp_path / "summary.csv").read_text().splitlines()[0] == \
-        "source,target,map,status,seconds,cpu_seconds,mean_error,error"
+        "source,target,map,status,seconds,cpu_seconds,mean_error,error,via"
     # Consistency over the collection: the cycle error of the direct maps and of the hub's.
     names = [Path(p).stem for p in paths]
     maps = {(Path(r["source"]).stem, Path(r["target"]).stem): read_map(r["map"]) for r in records}
@@ -78,6 +79,77 @@ def test_all_pairs_batch_gives_the_per_pair_maps(cluster, shapes, tmp_path):
     # A map composed with the identity maps: a collection of copies is exactly consistent.
     identity = {key: np.arange(500) for key in maps}
     np.testing.assert_array_equal(cycle_errors(identity, meshes, triples), 0.0)
+
+
+def test_a_batch_through_a_hub_matches_the_hub_pairs_and_composes_the_others(cluster, shapes, tmp_path, capsys):
+    paths, _ = shapes
+    hub = paths[1]
+    records = batch(all_pairs(paths), tmp_path, client=cluster, ground_truth="identity", hub=hub)
+    assert len(records) == 12 and all(r["status"] == "ok" for r in records)
+    maps = {(r["source"], r["target"]): read_map(r["map"]) for r in records}
+    for record in records:
+        a, b = record["source"], record["target"]
+        if hub in (a, b):  # matched: the per-pair map
+            assert not record.get("via")
+            np.testing.assert_array_equal(maps[a, b], meshcorr.match(a, b).map)
+        else:  # composed: source -> hub -> target
+            assert record["via"] == hub and record["mean_error"] < 0.05
+            np.testing.assert_array_equal(maps[a, b], maps[hub, b][maps[a, hub]])
+    assert sum(bool(r.get("via")) for r in records) == 6  # (n - 1)(n - 2) composed, 2(n - 1) matched
+    # The CLI: the automatic hub is the spectral medoid of the four poses, and the summary says so.
+    dna = {p: shape_dna(*_spectrum(p)) for p in paths}
+    medoid = spectral_medoid(dna)
+    assert main(["batch", "--all-pairs", *paths, "--hub", "auto", "--out", str(tmp_path / "auto"),
+                 "--scheduler", cluster.scheduler.address]) == 0
+    assert f"12 of 12 pairs mapped into {tmp_path / 'auto'} (6 composed through {medoid})" in capsys.readouterr().err
+    summary = json.loads((tmp_path / "auto" / "summary.json").read_text())["pairs"]
+    assert {r["via"] for r in summary if r.get("via")} == {medoid}
+    with pytest.raises(ParameterError, match="holds results made with other settings"):
+        batch(all_pairs(paths), tmp_path / "auto", client=cluster, hub=paths[0])
+
+
+def _spectrum(path: str) -> tuple[np.ndarray, float]:
+    from meshcorr.refine import laplace_basis
+
+    mesh = meshcorr.as_mesh(path)
+    return laplace_basis(mesh, 40, random_state=0)[0], mesh.area
+
+
+def test_a_hub_pair_that_fails_fails_the_maps_composed_through_it(cluster, shapes, tmp_path):
+    paths, bad = shapes
+    shapes_with_bad = [paths[0], paths[1], bad]
+    records = batch(all_pairs(shapes_with_bad), tmp_path, client=cluster, hub=paths[0])
+    status = {(r["source"], r["target"]): r for r in records}
+    assert status[paths[0], paths[1]]["status"] == "ok" and status[paths[1], paths[0]]["status"] == "ok"
+    failed = status[bad, paths[1]]
+    assert failed["status"] == "failed" and failed["via"] == paths[0]
+    assert "Composed through the hub: its map bad.off -> c0.off failed" in failed["error"]
+    assert "Composed through the hub: its map c0.off -> bad.off failed" in status[paths[1], bad]["error"]
+    # The automatic hub is never a shape that could not be prepared.
+    records = batch(all_pairs(shapes_with_bad), tmp_path / "auto", client=cluster, hub="auto")
+    assert {r.get("via") for r in records} - {None} <= {paths[0], paths[1]}
+
+
+def test_hub_error_paths(shapes, tmp_path, capsys):
+    paths, _ = shapes
+    with pytest.raises(ParameterError, match="is not one of the shapes of the batch"):
+        batch(all_pairs(paths[:3]), tmp_path, hub=paths[3])
+    with pytest.raises(ParameterError, match="needs every ordered pair of at least three shapes"):
+        batch(all_pairs(paths[:3])[:-1], tmp_path, hub=paths[0])
+    with pytest.raises(ParameterError, match="needs every ordered pair of at least three shapes"):
+        batch(all_pairs(paths[:2]), tmp_path, hub="auto")
+    assert main(["batch", "--template", paths[0], *paths[1:3], "--hub", "auto", "--out", str(tmp_path)]) == 2
+    assert "--hub needs --all-pairs" in capsys.readouterr().err
+    with pytest.raises(ParameterError, match="at least one shape"):
+        spectral_medoid({})
+    for values in ([0.0], [0.0, -1.0], [0.0, np.nan]):
+        with pytest.raises(ParameterError, match="Shape-DNA needs"):
+            shape_dna(np.array(values), 1.0)
+    # Scale-free: the same spectrum at another scale is the same Shape-DNA; the medoid of three
+    # spectra on a line is the middle one.
+    np.testing.assert_allclose(shape_dna(np.array([0.0, 4.0, 8.0]) / 4.0, 4.0), [4.0, 8.0])
+    line = {"a": np.array([1.0, 2.0]), "b": np.array([2.0, 4.0]), "c": np.array([4.0, 8.0])}
+    assert spectral_medoid(line) == "b" and spectral_medoid({"only": np.array([1.0])}) == "only"
 
 
 def test_a_corrupt_mesh_fails_its_pairs_and_the_others_finish(cluster, shapes, tmp_path, capsys):

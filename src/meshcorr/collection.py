@@ -26,6 +26,15 @@ core, BLAS held to one thread in each) and shuts it down at the end; pass a
 ``dask-worker`` on several machines, dask-jobqueue) to run the same graph
 there: the workers must see the mesh files and the output folder at the
 same paths. Dask is the optional extra ``meshcorr[dask]``.
+
+With ``hub`` (every ordered pair of a collection), only the maps to and
+from one shape, the hub, are matched; each other map is the composition
+source -> hub -> target (:mod:`meshcorr.consistency`), a task that depends
+on the two maps it composes: :math:`2(n-1)` matches instead of
+:math:`n(n-1)`, and maps that agree with each other through the hub.
+``hub="auto"`` takes the shape whose Laplace-Beltrami spectrum is most like
+the others' (:func:`meshcorr.consistency.spectral_medoid`), computed on the
+workers from the prepared shapes.
 """
 
 from __future__ import annotations
@@ -55,7 +64,7 @@ from .prepared import SHAPE_SETTINGS, PreparedShape, shape_settings
 BatchProgress = Callable[[int, int, int, "float | None"], None]
 
 #: Columns of ``summary.csv``.
-FIELDS = ["source", "target", "map", "status", "seconds", "cpu_seconds", "mean_error", "error"]
+FIELDS = ["source", "target", "map", "status", "seconds", "cpu_seconds", "mean_error", "error", "via"]
 #: ``status`` of a pair whose map was written.
 DONE = "ok"
 FAILED = "failed"
@@ -119,7 +128,7 @@ def map_name(source: str, target: str) -> str:
 
 def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_truth: str | None = None,
           cache=None, progress: BatchProgress | None = None, n_workers: int | None = None,
-          **options) -> list[dict]:
+          hub: str | None = None, **options) -> list[dict]:
     """Map every pair, writing ``OUT/maps/SOURCE__TARGET.txt`` and a summary as each finishes.
 
     Parameters
@@ -142,6 +151,11 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
         ``progress(done, total, failed, seconds_left)``.
     n_workers : int, optional
         Worker processes of the local cluster (default: one per core).
+    hub : str, optional
+        A mesh path among the shapes, or ``"auto"``: match only the pairs
+        that hold the hub and compose every other map through it (module
+        docstring). ``pairs`` must then be every ordered pair of its shapes
+        (:func:`all_pairs`).
     **options
         Options of :func:`meshcorr.match` for the spectral method (e.g.
         ``k``, ``random_state``, ``refine``, ``mode``, ``n_samples``); the
@@ -154,7 +168,8 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
         ``map`` (path), ``status`` ("ok" or "failed"), ``seconds`` (the
         pair's matching time), ``cpu_seconds`` (the CPU time of the worker
         process meanwhile), ``mean_error`` (with ``ground_truth``),
-        ``error`` (the failure's message).
+        ``error`` (the failure's message); with ``hub``, ``via`` (the hub,
+        for a composed map; its seconds are those of the composition).
 
     Raises
     ------
@@ -162,7 +177,8 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
         Dask is not installed (:data:`DASK_MISSING`).
     ParameterError
         Bad options (checked before any work), two pairs writing the same
-        map file, or an output folder holding results of other settings.
+        map file, an output folder holding results of other settings, or a
+        ``hub`` that is not one of the shapes of every ordered pair.
     """
     distributed = _import_distributed()
     settings, options = _split_options(options)
@@ -176,10 +192,12 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
     if ground_truth is not None and ground_truth != "identity" and not Path(ground_truth).is_dir():
         raise ParameterError(f"The ground truth must be 'identity' or a folder of SHAPE.vts files. "
                              f"Got {ground_truth!r}, which is not a folder.")
+    hub = None if hub is None else _check_hub(hub, pairs)
     out = Path(out_dir)
     (out / "maps").mkdir(parents=True, exist_ok=True)
     cache_root = None if cache is None else str(_cache_root(cache))
-    _check_run_settings(out, {"settings": settings, "options": _jsonable(options)})
+    run = {"settings": settings, "options": _jsonable(options)}
+    _check_run_settings(out, run if hub is None else dict(run, hub=hub))  # old folders have no "hub"
     records = {(r["source"], r["target"]): r for r in _read_summary(out)}
     todo = [(a, b) for a, b in pairs
             if not (records.get((a, b), {}).get("status") == DONE and (out / "maps" / map_name(a, b)).is_file())]
@@ -187,15 +205,29 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
     try:
         with _client(distributed, client, n_workers) as dask_client:
             shape_keys = {}
-            for path in sorted({p for pair in todo for p in pair}):
+            wanted = {p for pair in (pairs if hub == "auto" and todo else todo) for p in pair}
+            for path in sorted(wanted):
                 shape_keys[path] = dask_client.submit(_prepare_task, path, settings, options, cache_root,
                                                       key=f"prepare-{_task_key(path, settings, options)}")
-            futures = {}
+            if hub == "auto" and todo:
+                hub = _auto_hub(dask_client, shape_keys, settings, options)
+            futures, matched = {}, {}
             for a, b in todo:
+                if hub is not None and hub not in (a, b):
+                    continue  # composed below, from the hub's maps
                 map_path = str(out / "maps" / map_name(a, b))
                 key = f"match-{_task_key(a + chr(0) + b, settings, options, ground_truth, map_path)}"
                 future = dask_client.submit(_pair_task, shape_keys[a], shape_keys[b], a, b, map_path, settings,
                                             options, ground_truth, key=key)
+                futures[future], matched[a, b] = (a, b, map_path), future
+            for a, b in todo:
+                if hub is None or hub in (a, b):
+                    continue
+                map_path = str(out / "maps" / map_name(a, b))
+                steps = [matched.get(step, records.get(step)) for step in ((a, hub), (hub, b))]
+                key = f"compose-{_task_key(a + chr(0) + b, settings, options, ground_truth, map_path, hub)}"
+                future = dask_client.submit(_compose_task, shape_keys[a], shape_keys[b], *steps, a, b, hub,
+                                            map_path, settings, ground_truth, key=key)
                 futures[future] = (a, b, map_path)
             start, done, failed, written = time.perf_counter(), 0, 0, time.perf_counter()
             if progress is not None:
@@ -205,6 +237,8 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
                     record = future.result()
                 except Exception as exc:  # noqa: BLE001 - e.g. KilledWorker: the pair crashed its worker
                     record = dict(_record(*futures[future]), error=_one_line(exc))
+                    if hub is not None and hub not in futures[future][:2]:
+                        record["via"] = hub
                 future.release()
                 records[(record["source"], record["target"])] = record
                 done, failed = done + 1, failed + (record["status"] != DONE)
@@ -217,6 +251,44 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
     finally:  # after an interruption too: a rerun skips what is recorded
         _write_summary(out, [records[p] for p in pairs if p in records])
     return [records[p] for p in pairs]
+
+
+def _check_hub(hub: str, pairs: list[tuple[str, str]]) -> str:
+    """``hub`` as spelled in ``pairs`` (or "auto"), checked: the pairs are every ordered pair of their shapes."""
+    shapes = sorted({p for pair in pairs for p in pair})
+    if set(pairs) != set(all_pairs(shapes)) or len(shapes) < 3:
+        raise ParameterError("Mapping through a hub needs every ordered pair of at least three shapes "
+                             "(meshcorr.collection.all_pairs, or meshcorr batch --all-pairs).")
+    if hub == "auto":
+        return hub
+    same = [p for p in shapes if os.path.abspath(p) == os.path.abspath(str(hub))]
+    if not same:
+        raise ParameterError(f"The hub {hub} is not one of the shapes of the batch; give one of them "
+                             "(as listed) or 'auto'.")
+    return same[0]
+
+
+def _auto_hub(dask_client, shape_keys: dict, settings: dict, options: dict) -> str:
+    """The shapes' spectral medoid (:func:`meshcorr.consistency.spectral_medoid`); Shape-DNA from the workers."""
+    from .consistency import spectral_medoid
+
+    paths = sorted(shape_keys)
+    dna = dask_client.gather([dask_client.submit(_dna_task, shape_keys[p], settings,
+                                                 key=f"dna-{_task_key(p, settings, options)}") for p in paths])
+    known = {p: d for p, d in zip(paths, dna) if d is not None}
+    return spectral_medoid(known) if known else paths[0]  # no shape prepared: every pair fails anyway
+
+
+def _dna_task(shape, settings: dict):
+    """Worker: :func:`meshcorr.consistency.shape_dna` of a prepared shape (None for a failed preparation)."""
+    from .consistency import shape_dna
+    from .refine import laplace_basis
+
+    if not isinstance(shape, PreparedShape):
+        return None
+    with single_blas_thread():
+        values, _ = laplace_basis(shape.mesh, settings["refine_k"], random_state=settings["random_state"])
+    return shape_dna(values, shape.mesh.area)
 
 
 def _import_distributed():
@@ -316,11 +388,8 @@ def _pair_task(source, target, source_path: str, target_path: str, map_path: str
     from .pipeline import match
 
     record = _record(source_path, target_path, map_path)
-    for shape, path in ((source, source_path), (target, target_path)):
-        if not isinstance(shape, PreparedShape):  # the message of the failed preparation
-            name = Path(path).name
-            record["error"] = shape if name in shape else f"{name}: {shape}"
-            return record
+    if _failed_shape(record, (source, source_path), (target, target_path)):
+        return record
     try:
         with single_blas_thread():
             source, target = _in_pair_mode(source, target, settings, options)
@@ -336,6 +405,44 @@ def _pair_task(source, target, source_path: str, target_path: str, map_path: str
     except Exception as exc:  # noqa: BLE001 - a failed pair is a record, never the end of the batch
         record["error"] = _one_line(exc)
     return record
+
+
+def _compose_task(source, target, to_hub: dict | None, from_hub: dict | None, source_path: str,
+                  target_path: str, hub: str, map_path: str, settings: dict, ground_truth: str | None) -> dict:
+    """Worker: the map source -> hub -> target from the two matched maps' records, written; its record."""
+    from .io import read_map, write_map
+
+    record = dict(_record(source_path, target_path, map_path), via=hub)
+    for step, (a, b) in ((to_hub, (source_path, hub)), (from_hub, (hub, target_path))):
+        if step is None or step["status"] != DONE:
+            reason = "was not mapped" if step is None else f"failed: {step['error']}"
+            record["error"] = f"Composed through the hub: its map {Path(a).name} -> {Path(b).name} {reason}"[:300]
+            return record
+    if _failed_shape(record, (source, source_path), (target, target_path)):
+        return record
+    try:
+        start, cpu = time.perf_counter(), time.process_time()
+        mapping = read_map(from_hub["map"])[read_map(to_hub["map"])]  # f_HB o f_AH (meshcorr.consistency)
+        write_map(map_path, mapping)
+        record["seconds"], record["cpu_seconds"] = time.perf_counter() - start, time.process_time() - cpu
+        if ground_truth is not None:
+            with single_blas_thread():
+                record["mean_error"] = _mean_error(source, target, mapping, source_path, target_path,
+                                                   ground_truth, settings["geodesic"])
+        record["status"] = DONE
+    except Exception as exc:  # noqa: BLE001 - a failed pair is a record, never the end of the batch
+        record["error"] = _one_line(exc)
+    return record
+
+
+def _failed_shape(record: dict, *shapes) -> bool:
+    """Whether a ``(shape, path)`` failed its preparation; if so its message goes into ``record["error"]``."""
+    for shape, path in shapes:
+        if not isinstance(shape, PreparedShape):  # the message of the failed preparation
+            name = Path(path).name
+            record["error"] = shape if name in shape else f"{name}: {shape}"
+            return True
+    return False
 
 
 def _record(source_path: str, target_path: str, map_path: str) -> dict:

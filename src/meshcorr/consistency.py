@@ -24,6 +24,16 @@ Euclidean distance, divided by :math:`\\sqrt{\\mathrm{area}}`, between
 every map between two other shapes is replaced by
 :math:`f_{HB} \\circ f_{AH}`. Whether that lowers the error against ground
 truth is measured, not assumed (``benchmarks/RESULTS-collections.md``).
+
+Choosing the hub that way needs every map. A batch that maps through a hub
+from the start (``meshcorr batch --hub``) computes only the :math:`2(n-1)`
+maps to and from the hub and composes the other :math:`(n-1)(n-2)`; its
+automatic hub (:func:`spectral_medoid`) is the shape whose Laplace-Beltrami
+spectrum is nearest to all the others' (the medoid of the "Shape-DNA": M.
+Reuter, F.-E. Wolter, N. Peinecke, "Laplace-Beltrami spectra as 'Shape-DNA'
+of surfaces and solids", Computer-Aided Design 38, 2006): the shape most
+like the rest, cheap to find before any map exists. A wrong map to or from
+the hub is repeated in the :math:`n - 2` maps composed with it.
 """
 
 from __future__ import annotations
@@ -109,6 +119,47 @@ def choose_hub(maps: Maps, meshes: Mapping[str, Mesh], *, n_points: int = 200,
         raise ParameterError("No shape has maps to and from every other shape: the hub needs them "
                              "(run the collection with --all-pairs and no failed pairs through it).")
     return best
+
+
+def shape_dna(eigenvalues: np.ndarray, area: float) -> np.ndarray:
+    """``(k - 1,)``: the Laplace-Beltrami eigenvalues after the zero one, times the area (scale-free).
+
+    Parameters
+    ----------
+    eigenvalues : (k,) float
+        Ascending eigenvalues of the mesh's Laplace-Beltrami operator,
+        the first one (about 0) dropped here.
+    area : float
+        The mesh's surface area: :math:`\\lambda_i \\cdot A` does not change
+        with a uniform scale of the shape.
+    """
+    values = np.asarray(eigenvalues, dtype=np.float64)[1:] * float(area)
+    if values.size == 0 or not np.all(np.isfinite(values)) or np.any(values <= 0):
+        raise ParameterError("A Shape-DNA needs at least two finite eigenvalues, the ones after the "
+                             "first positive.")
+    return values
+
+
+def spectral_medoid(dna: Mapping[str, np.ndarray]) -> str:
+    """The shape of least total Shape-DNA distance to the others (module docstring).
+
+    The distance of two shapes is the mean of :math:`|\\log a_i - \\log b_i|`
+    over their first :math:`\\min(k_a, k_b)` scaled eigenvalues
+    (:func:`shape_dna`): relative differences, so that the many high
+    eigenvalues do not outweigh the first ones. Ties go to the first name.
+
+    Parameters
+    ----------
+    dna : {name: (k - 1,) float}
+        :func:`shape_dna` of each shape, at least one.
+    """
+    names = list(dna)
+    if not names:
+        raise ParameterError("The hub is chosen among at least one shape; got none.")
+    logs = {name: np.log(np.asarray(dna[name], dtype=np.float64)) for name in names}
+    size = min(len(v) for v in logs.values())
+    total = [sum(np.abs(logs[a][:size] - logs[b][:size]).mean() for b in names if b != a) for a in names]
+    return names[int(np.argmin(total))]
 
 
 def through_hub(maps: Maps, hub: str) -> dict[tuple[str, str], np.ndarray]:

@@ -31,6 +31,12 @@ recorded and the others go on. Exit code: 0 if every pair was mapped, 4 if
 any failed. With --all-pairs, --consistency also reports the cycle-consistency
 error and writes maps made consistent through the collection (see
 meshcorr.consistency).
+
+--all-pairs with --hub SHAPE (or --hub auto: the shape whose Laplace-Beltrami
+spectrum is most like the others') matches only the 2(n-1) pairs to and from
+that shape and composes every other map through it (SOURCE -> hub -> TARGET):
+about n/2 times fewer matches, and maps that agree with each other. A wrong
+map to or from the hub is repeated in every map composed with it.
 """
 
 
@@ -52,6 +58,9 @@ def add_parser(sub) -> None:
     p.add_argument("--cache", metavar="DIR", nargs="?", const=True, default=None,
                    help="keep prepared shapes in this on-disk cache (no DIR: the default cache, "
                         "see 'meshcorr cache info')")
+    p.add_argument("--hub", metavar="SHAPE|auto",
+                   help="with --all-pairs: match only the pairs to and from SHAPE (auto: the shape most like "
+                        "the others by its spectrum) and compose the other maps through it")
     p.add_argument("--consistency", action="store_true",
                    help="with --all-pairs: cycle-consistency error and consistent maps (consistent/)")
     g = p.add_argument_group("method options (as in 'meshcorr match')")
@@ -86,6 +95,9 @@ def _pairs(args) -> list[tuple[str, str]]:
                              "list them after --all-pairs, with --pairs put them in the file.")
     if args.consistency and not args.all_pairs:
         raise ParameterError("--consistency needs --all-pairs (it compares the maps of every ordered pair).")
+    if args.hub and not args.all_pairs:
+        raise ParameterError("--hub needs --all-pairs (it composes the maps between every two shapes through "
+                             "the hub); with --template T, T is the hub already.")
     if args.pairs:
         return read_pairs(args.pairs)
     if args.all_pairs:
@@ -150,7 +162,7 @@ def run(args) -> int:
     try:
         records = batch(pairs, args.out, client=client, ground_truth=args.gt, cache=args.cache,
                         n_workers=args.workers, progress=None if args.quiet else BatchBar(sys.stderr),
-                        **options)
+                        hub=args.hub, **options)
     finally:
         if client is not None:
             client.close()
@@ -164,7 +176,10 @@ def run(args) -> int:
               f"{report['consistent_cycle_error']:.4f} (through {report['hub']}); see "
               f"{report['path']}", file=sys.stderr)
     if not args.quiet:
+        hubs = {r["via"] for r in records if r.get("via")}
+        composed = sum(bool(r.get("via")) and r["status"] == "ok" for r in records)
         print(f"meshcorr: {len(records) - len(failed)} of {len(records)} pairs mapped into {args.out}"
+              + (f" ({composed} composed through {', '.join(sorted(hubs))})" if hubs else "")
               + (f"; {len(failed)} failed, see the 'error' column of summary.csv" if failed else ""),
               file=sys.stderr)
     if failed:

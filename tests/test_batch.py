@@ -96,6 +96,13 @@ def test_a_batch_through_a_hub_matches_the_hub_pairs_and_composes_the_others(clu
             assert record["via"] == hub and record["mean_error"] < 0.05
             np.testing.assert_array_equal(maps[a, b], maps[hub, b][maps[a, hub]])
     assert sum(bool(r.get("via")) for r in records) == 6  # (n - 1)(n - 2) composed, 2(n - 1) matched
+    # A rerun skips every pair, composed ones included; a composed map whose file is gone is composed again.
+    Path(maps_path := records[1]["map"]).unlink()
+    totals = []
+    again = batch(all_pairs(paths), tmp_path, client=cluster, ground_truth="identity", hub=hub,
+                  progress=lambda d, t, f, left: totals.append(t))
+    assert records[1]["via"] == hub and totals[0] == 1 and all(r["status"] == "ok" for r in again)
+    np.testing.assert_array_equal(read_map(maps_path), maps[records[1]["source"], records[1]["target"]])
     # The CLI: the automatic hub is the spectral medoid of the four poses, and the summary says so.
     dna = {p: shape_dna(*_spectrum(p)) for p in paths}
     medoid = spectral_medoid(dna)

@@ -271,6 +271,23 @@ def test_meshcorr_threads_1_runs_the_thread_pools_in_the_calling_thread(monkeypa
     assert parallel_map(lambda _: threading.get_ident(), [0, 1, 2]) == [threading.get_ident()] * 3
 
 
+def test_composed_maps_keep_unmapped_vertices_unmapped(shapes):
+    # -1 (a vertex dropped by largest_component, or outside a part) must not index B's last vertex.
+    from meshcorr.consistency import compose
+
+    np.testing.assert_array_equal(compose(np.array([2, -1, 0]), np.array([5, -1, 7])), [7, -1, 5])
+    np.testing.assert_array_equal(compose(np.array([-1, -1]), np.array([], dtype=int)), [-1, -1])
+    paths, _ = shapes
+    mesh = meshcorr.as_mesh(paths[0])
+    meshes = {"a": mesh, "b": mesh, "c": mesh}
+    half = np.where(np.arange(500) < 250, np.arange(500), -1)
+    maps = {("a", "b"): half, ("b", "c"): np.arange(500), ("a", "c"): np.arange(500)}
+    np.testing.assert_array_equal(through_hub(maps, "b")[("a", "c")], half)
+    assert cycle_errors(maps, meshes, [("a", "b", "c")])[0] == 0.0  # the unmapped half does not count
+    maps["a", "b"] = np.full(500, -1)
+    assert np.isnan(cycle_errors(maps, meshes, [("a", "b", "c")])[0])
+
+
 def test_consistency_error_paths(shapes, tmp_path):
     paths, _ = shapes
     mesh = meshcorr.as_mesh(paths[0])

@@ -410,6 +410,7 @@ def _pair_task(source, target, source_path: str, target_path: str, map_path: str
 def _compose_task(source, target, to_hub: dict | None, from_hub: dict | None, source_path: str,
                   target_path: str, hub: str, map_path: str, settings: dict, ground_truth: str | None) -> dict:
     """Worker: the map source -> hub -> target from the two matched maps' records, written; its record."""
+    from .consistency import compose
     from .io import read_map, write_map
 
     record = dict(_record(source_path, target_path, map_path), via=hub)
@@ -422,7 +423,7 @@ def _compose_task(source, target, to_hub: dict | None, from_hub: dict | None, so
         return record
     try:
         start, cpu = time.perf_counter(), time.process_time()
-        mapping = read_map(from_hub["map"])[read_map(to_hub["map"])]  # f_HB o f_AH (meshcorr.consistency)
+        mapping = compose(read_map(to_hub["map"]), read_map(from_hub["map"]))  # f_HB o f_AH
         write_map(map_path, mapping)
         record["seconds"], record["cpu_seconds"] = time.perf_counter() - start, time.process_time() - cpu
         if ground_truth is not None:

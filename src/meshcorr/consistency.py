@@ -54,6 +54,18 @@ from .mesh import Mesh, as_mesh
 Maps = Mapping[tuple[str, str], np.ndarray]
 
 
+def compose(first: np.ndarray, second: np.ndarray) -> np.ndarray:
+    """The map A -> C of ``first`` (A -> B) then ``second`` (B -> C), ``(n_A,)`` int: ``second[first]``.
+
+    A vertex a map leaves unmapped (-1: dropped by ``largest_component``, or
+    outside a part) stays unmapped; it is never sent to B's last vertex.
+    """
+    first, second = np.asarray(first, dtype=np.int64), np.asarray(second, dtype=np.int64)
+    if len(second) == 0:
+        return np.full(len(first), -1, dtype=np.int64)
+    return np.where(first >= 0, second[np.maximum(first, 0)], -1)
+
+
 def sample_triples(names: Sequence[str], maps: Maps, n_triples: int, random_state: int | None = 0
                    ) -> list[tuple[str, str, str]]:
     """Up to ``n_triples`` distinct ordered triples (A, B, C) whose three maps exist, seeded."""
@@ -81,6 +93,9 @@ def cycle_errors(maps: Maps, meshes: Mapping[str, Mesh], triples: Sequence[tuple
         Geodesic solver of :math:`d_C`.
     random_state : int or None
         Seed of the samples.
+
+    A sampled vertex that one of the three maps leaves unmapped (-1) does
+    not count; a triple with none left is NaN.
     """
     n_points = check_int("n_points", n_points, minimum=1)
     rng = np.random.default_rng(random_state)
@@ -89,9 +104,12 @@ def cycle_errors(maps: Maps, meshes: Mapping[str, Mesh], triples: Sequence[tuple
     for t, (a, b, c) in enumerate(triples):
         n_a = len(maps[a, c])
         sample = rng.choice(n_a, size=min(n_points, n_a), replace=False)
-        two_step = maps[b, c][maps[a, b][sample]]
-        direct = maps[a, c][sample]
-        distances = cache.pair_distances(meshes[c], two_step, direct)
+        two_step, direct = compose(maps[a, b][sample], maps[b, c]), maps[a, c][sample]
+        mapped = (two_step >= 0) & (direct >= 0)  # vertices some map leaves out do not count
+        if not mapped.any():
+            out[t] = np.nan
+            continue
+        distances = cache.pair_distances(meshes[c], two_step[mapped], direct[mapped])
         out[t] = distances.mean() / np.sqrt(meshes[c].area)
     return out
 
@@ -110,8 +128,11 @@ def choose_hub(maps: Maps, meshes: Mapping[str, Mesh], *, n_points: int = 200,
             n_a = len(maps[a, b])
             sample = rng.choice(n_a, size=min(n_points, n_a), replace=False)
             V = meshes[b].vertices
-            gap = np.linalg.norm(V[maps[hub, b][maps[a, hub][sample]]] - V[maps[a, b][sample]], axis=1)
-            scores.append(gap.mean() / np.sqrt(meshes[b].area))
+            two_step, direct = compose(maps[a, hub][sample], maps[hub, b]), maps[a, b][sample]
+            mapped = (two_step >= 0) & (direct >= 0)
+            if mapped.any():
+                gap = np.linalg.norm(V[two_step[mapped]] - V[direct[mapped]], axis=1)
+                scores.append(gap.mean() / np.sqrt(meshes[b].area))
         covers = all((a, hub) in maps and (hub, a) in maps for a in names if a != hub)
         if scores and covers and np.mean(scores) < best_score:
             best, best_score = hub, float(np.mean(scores))
@@ -166,7 +187,7 @@ def through_hub(maps: Maps, hub: str) -> dict[tuple[str, str], np.ndarray]:
     """Every map between two shapes other than ``hub`` replaced by :math:`f_{HB} \\circ f_{AH}`."""
     out = {}
     for (a, b), mapping in maps.items():
-        out[a, b] = mapping if hub in (a, b) else maps[hub, b][maps[a, hub]]
+        out[a, b] = mapping if hub in (a, b) else compose(maps[a, hub], maps[hub, b])
     return out
 
 
@@ -205,10 +226,16 @@ def consistency_report(out_dir, shapes: Sequence[str], records: Sequence[dict], 
     (out / "consistent").mkdir(exist_ok=True)
     for (a, b), mapping in consistent.items():
         write_map(out / "consistent" / f"{a}__{b}.txt", mapping)
-    report = {"hub": hub, "cycle_error": float(direct_errors.mean()),
-              "consistent_cycle_error": float(hub_errors.mean()), "n_triples": len(triples),
+    report = {"hub": hub, "cycle_error": _mean(direct_errors),
+              "consistent_cycle_error": _mean(hub_errors), "n_triples": len(triples),
               "n_points": n_points, "triples": [list(t) for t in triples],
               "path": str(out / "consistency.json")}
     payload = json.dumps(report, indent=1).encode()
     atomic_write(out / "consistency.json", lambda file: file.write(payload))
     return report
+
+
+def _mean(errors: np.ndarray) -> float | None:
+    """The mean of the finite errors (None if there is none: JSON has no NaN)."""
+    finite = errors[np.isfinite(errors)]
+    return float(finite.mean()) if finite.size else None

@@ -172,9 +172,10 @@ def run(args) -> int:
 
         report = consistency_report(args.out, args.all_pairs, records, geodesic=args.geodesic,
                                     random_state=args.seed)
-        print(f"meshcorr: cycle-consistency error {report['cycle_error']:.4f} (direct maps), "
-              f"{report['consistent_cycle_error']:.4f} (through {report['hub']}); see "
-              f"{report['path']}", file=sys.stderr)
+        direct, through = (f"{v:.4f}" if v is not None else "n/a (no mapped vertex sampled)"
+                           for v in (report["cycle_error"], report["consistent_cycle_error"]))
+        print(f"meshcorr: cycle-consistency error {direct} (direct maps), {through} (through {report['hub']}); "
+              f"see {report['path']}", file=sys.stderr)
     if not args.quiet:
         hubs = {r["via"] for r in records if r.get("via")}
         composed = sum(bool(r.get("via")) and r["status"] == "ok" for r in records)

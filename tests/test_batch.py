@@ -137,6 +137,23 @@ def test_a_hub_pair_that_fails_fails_the_maps_composed_through_it(cluster, shape
     assert {r.get("via") for r in records} - {None} <= {paths[0], paths[1]}
 
 
+def test_the_time_left_counts_matches_at_their_pace_and_compositions_at_theirs(monkeypatch):
+    from meshcorr import collection
+
+    clock = iter([0.0, 5.0, 10.0, 10.0, 15.0, 20.0, 20.0, 21.0])
+    monkeypatch.setattr(collection.time, "perf_counter", lambda: next(clock))
+    eta = collection._Estimate(4, 3, collection.time.perf_counter())  # start at 0 s
+    eta.finished(True)  # a match at 5 s
+    eta.finished(True)  # another at 10 s
+    assert eta.seconds_left() == 10.0  # two matches left at 5 s each, compositions not counted
+    eta.finished(True)  # 15 s
+    eta.finished(True)  # 20 s: the last match
+    assert eta.seconds_left() == 0.0 * 3  # no composition done yet: nothing to go by (20 - 20 s)
+    eta.finished(False)  # two compositions, then asked at 21 s
+    eta.finished(False)
+    assert eta.seconds_left() == 1.0 / 2 * 1  # 1 s since the last match for 2 compositions, 1 left
+
+
 def test_hub_error_paths(shapes, tmp_path, capsys):
     paths, _ = shapes
     with pytest.raises(ParameterError, match="is not one of the shapes of the batch"):

@@ -230,6 +230,8 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
                                             map_path, settings, ground_truth, key=key)
                 futures[future] = (a, b, map_path)
             start, done, failed, written = time.perf_counter(), 0, 0, time.perf_counter()
+            eta = _Estimate(len(matched), len(futures) - len(matched), start)
+            matched_futures = set(matched.values())
             if progress is not None:
                 progress(0, len(todo), 0, None)
             for future in distributed.as_completed(list(futures)):
@@ -242,15 +244,39 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
                 future.release()
                 records[(record["source"], record["target"])] = record
                 done, failed = done + 1, failed + (record["status"] != DONE)
+                eta.finished(future in matched_futures)
                 if time.perf_counter() - written > SUMMARY_EVERY:  # a rerun redoes the pairs not yet written
                     _write_summary(out, [records[p] for p in pairs if p in records])
                     written = time.perf_counter()
                 if progress is not None:
-                    elapsed = time.perf_counter() - start
-                    progress(done, len(todo), failed, elapsed / done * (len(todo) - done))
+                    progress(done, len(todo), failed, eta.seconds_left())
     finally:  # after an interruption too: a rerun skips what is recorded
         _write_summary(out, [records[p] for p in pairs if p in records])
     return [records[p] for p in pairs]
+
+
+class _Estimate:
+    """Seconds left: matches at their own pace, then compositions (milliseconds each) at theirs."""
+
+    def __init__(self, n_matched: int, n_composed: int, start: float) -> None:
+        self.left = [n_matched, n_composed]  # pairs left to match, maps left to compose
+        self.done = [0, 0]
+        self.start = self.last_match = start
+
+    def finished(self, was_matched: bool) -> None:
+        kind = 0 if was_matched else 1
+        self.left[kind] -= 1
+        self.done[kind] += 1
+        if was_matched:
+            self.last_match = time.perf_counter()
+
+    def seconds_left(self) -> float:
+        now = time.perf_counter()
+        if self.left[0] and self.done[0]:  # compositions run beside the matches: their time is not counted
+            return (now - self.start) / self.done[0] * self.left[0]
+        if not self.left[0]:  # only compositions left, at the pace since the last match
+            return (now - self.last_match) / max(self.done[1], 1) * self.left[1]
+        return (now - self.start) / max(sum(self.done), 1) * sum(self.left)
 
 
 def _check_hub(hub: str, pairs: list[tuple[str, str]]) -> str:

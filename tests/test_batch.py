@@ -15,7 +15,7 @@ import meshcorr
 from meshcorr import datasets as ds
 from meshcorr.collection import all_pairs, batch, map_name, read_pairs, template_pairs
 from meshcorr.cli import main
-from meshcorr.consistency import (choose_hub, cycle_errors, sample_triples, shape_dna, spectral_medoid,
+from meshcorr.consistency import (choose_hub, cycle_errors, invert, sample_triples, shape_dna, spectral_medoid,
                                   through_hub)
 from meshcorr.errors import MeshcorrError, ParameterError
 from meshcorr.io import read_map
@@ -62,7 +62,7 @@ def test_all_pairs_batch_gives_the_per_pair_maps(cluster, shapes, tmp_path):
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["n_pairs"] == 12 and summary["n_failed"] == 0
     assert (tmp_path / "summary.csv").read_text().splitlines()[0] == \
-        "source,target,map,status,seconds,cpu_seconds,mean_error,error,via"
+        "source,target,map,status,seconds,cpu_seconds,mean_error,error,via,made"
     # Consistency over the collection: the cycle error of the direct maps and of the hub's.
     names = [Path(p).stem for p in paths]
     maps = {(Path(r["source"]).stem, Path(r["target"]).stem): read_map(r["map"]) for r in records}
@@ -87,15 +87,20 @@ def test_a_batch_through_a_hub_matches_the_hub_pairs_and_composes_the_others(clu
     records = batch(all_pairs(paths), tmp_path, client=cluster, ground_truth="identity", hub=hub)
     assert len(records) == 12 and all(r["status"] == "ok" for r in records)
     maps = {(r["source"], r["target"]): read_map(r["map"]) for r in records}
+    hub_points = meshcorr.as_mesh(hub).vertices
     for record in records:
         a, b = record["source"], record["target"]
-        if hub in (a, b):  # matched: the per-pair map
-            assert not record.get("via")
+        assert record["mean_error"] < 0.05  # poses of one shape
+        if b == hub:  # matched: the per-pair map
+            assert not record.get("via") and record["made"] == "match"
             np.testing.assert_array_equal(maps[a, b], meshcorr.match(a, b).map)
+        elif a == hub:  # the inverse of b's map onto the hub
+            assert record["via"] == hub and record["made"] == "inverse"
+            np.testing.assert_array_equal(maps[a, b], invert(maps[b, hub], hub_points))
         else:  # composed: source -> hub -> target
-            assert record["via"] == hub and record["mean_error"] < 0.05
+            assert record["via"] == hub and record["made"] == "composition"
             np.testing.assert_array_equal(maps[a, b], maps[hub, b][maps[a, hub]])
-    assert sum(bool(r.get("via")) for r in records) == 6  # (n - 1)(n - 2) composed, 2(n - 1) matched
+    assert [r["made"] for r in records].count("match") == 3  # n - 1 matches for n (n - 1) maps
     # A rerun skips every pair, composed ones included; a composed map whose file is gone is composed again.
     Path(maps_path := records[1]["map"]).unlink()
     totals = []
@@ -108,7 +113,7 @@ def test_a_batch_through_a_hub_matches_the_hub_pairs_and_composes_the_others(clu
     medoid = spectral_medoid(dna)
     assert main(["batch", "--all-pairs", *paths, "--hub", "auto", "--out", str(tmp_path / "auto"),
                  "--scheduler", cluster.scheduler.address]) == 0
-    assert f"12 of 12 pairs mapped into {tmp_path / 'auto'} (6 composed through {medoid})" in capsys.readouterr().err
+    assert f"12 of 12 pairs mapped into {tmp_path / 'auto'} (9 made through {medoid})" in capsys.readouterr().err
     summary = json.loads((tmp_path / "auto" / "summary.json").read_text())["pairs"]
     assert {r["via"] for r in summary if r.get("via")} == {medoid}
     with pytest.raises(ParameterError, match="holds results made with other settings"):
@@ -132,6 +137,7 @@ def test_a_hub_pair_that_fails_fails_the_maps_composed_through_it(cluster, shape
     assert failed["status"] == "failed" and failed["via"] == paths[0]
     assert "Composed through the hub: its map bad.off -> c0.off failed" in failed["error"]
     assert "Composed through the hub: its map c0.off -> bad.off failed" in status[paths[1], bad]["error"]
+    assert "Inverted from the map bad.off -> c0.off, which failed" in status[paths[0], bad]["error"]
     # The automatic hub is never a shape that could not be prepared.
     records = batch(all_pairs(shapes_with_bad), tmp_path / "auto", client=cluster, hub="auto")
     assert {r.get("via") for r in records} - {None} <= {paths[0], paths[1]}
@@ -164,6 +170,8 @@ def test_hub_error_paths(shapes, tmp_path, capsys):
         batch(all_pairs(paths[:2]), tmp_path, hub="auto")
     assert main(["batch", "--template", paths[0], *paths[1:3], "--hub", "auto", "--out", str(tmp_path)]) == 2
     assert "--hub needs --all-pairs" in capsys.readouterr().err
+    with pytest.raises(ParameterError, match="does not go with partial"):
+        batch(all_pairs(paths[:3]), tmp_path, hub="auto", partial="source")
     with pytest.raises(ParameterError, match="at least one shape"):
         spectral_medoid({})
     for values in ([0.0], [0.0, -1.0], [0.0, np.nan]):
@@ -286,6 +294,18 @@ def test_meshcorr_threads_1_runs_the_thread_pools_in_the_calling_thread(monkeypa
 
     monkeypatch.setenv("MESHCORR_THREADS", "1")  # what each worker process of the local cluster gets
     assert parallel_map(lambda _: threading.get_ident(), [0, 1, 2]) == [threading.get_ident()] * 3
+
+
+def test_an_inverse_map_sends_each_vertex_to_the_source_of_its_nearest_image():
+    points = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0], [np.nan, np.nan, np.nan], [3, 0, 0]])
+    # Sources 0 and 1 hit vertex 0, source 2 hits vertex 2, source 3 is unmapped; vertex 3 is missing.
+    inverse = invert(np.array([0, 0, 2, -1]), points)
+    np.testing.assert_array_equal(inverse, [0, 0, 2, -1, 2])  # 1 -> nearest image (0, source 0); 4 -> 2
+    np.testing.assert_array_equal(invert(np.array([-1, -1]), points), [-1] * 5)
+    # A bijection inverts exactly.
+    order = np.random.default_rng(0).permutation(5)
+    line = np.arange(15.0).reshape(5, 3)
+    np.testing.assert_array_equal(invert(order, line)[order], np.arange(5))
 
 
 def test_composed_maps_keep_unmapped_vertices_unmapped(shapes):

@@ -27,10 +27,11 @@ core, BLAS held to one thread in each) and shuts it down at the end; pass a
 there: the workers must see the mesh files and the output folder at the
 same paths. Dask is the optional extra ``meshcorr[dask]``.
 
-With ``hub`` (every ordered pair of a collection), only the maps to and
-from one shape, the hub, are matched; each other map is the composition
-source -> hub -> target (:mod:`meshcorr.consistency`), a task that depends
-on the two maps it composes: :math:`2(n-1)` matches instead of
+With ``hub`` (every ordered pair of a collection), only the maps from each
+shape onto one shape, the hub, are matched; the hub's map onto a shape is
+the inverse of that shape's map onto the hub, and each other map is the
+composition source -> hub -> target (:mod:`meshcorr.consistency`), each a
+task that depends on the maps it is made of: :math:`n-1` matches instead of
 :math:`n(n-1)`, and maps that agree with each other through the hub.
 ``hub="auto"`` takes the shape whose Laplace-Beltrami spectrum is most like
 the others' (:func:`meshcorr.consistency.spectral_medoid`), computed on the
@@ -64,7 +65,7 @@ from .prepared import SHAPE_SETTINGS, PreparedShape, shape_settings
 BatchProgress = Callable[[int, int, int, "float | None"], None]
 
 #: Columns of ``summary.csv``.
-FIELDS = ["source", "target", "map", "status", "seconds", "cpu_seconds", "mean_error", "error", "via"]
+FIELDS = ["source", "target", "map", "status", "seconds", "cpu_seconds", "mean_error", "error", "via", "made"]
 #: ``status`` of a pair whose map was written.
 DONE = "ok"
 FAILED = "failed"
@@ -152,10 +153,10 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
     n_workers : int, optional
         Worker processes of the local cluster (default: one per core).
     hub : str, optional
-        A mesh path among the shapes, or ``"auto"``: match only the pairs
-        that hold the hub and compose every other map through it (module
-        docstring). ``pairs`` must then be every ordered pair of its shapes
-        (:func:`all_pairs`).
+        A mesh path among the shapes, or ``"auto"``: match only each shape
+        onto the hub, invert those maps and compose every other map through
+        the hub (module docstring). ``pairs`` must then be every ordered
+        pair of its shapes (:func:`all_pairs`), without ``partial``.
     **options
         Options of :func:`meshcorr.match` for the spectral method (e.g.
         ``k``, ``random_state``, ``refine``, ``mode``, ``n_samples``); the
@@ -169,7 +170,8 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
         pair's matching time), ``cpu_seconds`` (the CPU time of the worker
         process meanwhile), ``mean_error`` (with ``ground_truth``),
         ``error`` (the failure's message); with ``hub``, ``via`` (the hub,
-        for a composed map; its seconds are those of the composition).
+        for a map made from the hub's maps) and ``made`` ("match",
+        "inverse" or "composition"; the seconds are those of its making).
 
     Raises
     ------
@@ -192,7 +194,7 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
     if ground_truth is not None and ground_truth != "identity" and not Path(ground_truth).is_dir():
         raise ParameterError(f"The ground truth must be 'identity' or a folder of SHAPE.vts files. "
                              f"Got {ground_truth!r}, which is not a folder.")
-    hub = None if hub is None else _check_hub(hub, pairs)
+    hub = None if hub is None else _check_hub(hub, pairs, options)
     out = Path(out_dir)
     (out / "maps").mkdir(parents=True, exist_ok=True)
     cache_root = None if cache is None else str(_cache_root(cache))
@@ -213,18 +215,29 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
                 hub = _auto_hub(dask_client, shape_keys, settings, options)
             futures, matched = {}, {}
             for a, b in todo:
-                if hub is not None and hub not in (a, b):
-                    continue  # composed below, from the hub's maps
+                if hub is not None and b != hub:
+                    continue  # made below, from the maps onto the hub
                 map_path = str(out / "maps" / map_name(a, b))
                 key = f"match-{_task_key(a + chr(0) + b, settings, options, ground_truth, map_path)}"
                 future = dask_client.submit(_pair_task, shape_keys[a], shape_keys[b], a, b, map_path, settings,
                                             options, ground_truth, key=key)
                 futures[future], matched[a, b] = (a, b, map_path), future
+            inverses = {}
+            for a, b in todo:
+                if hub is None or a != hub:
+                    continue
+                map_path = str(out / "maps" / map_name(a, b))
+                key = f"invert-{_task_key(a + chr(0) + b, settings, options, ground_truth, map_path)}"
+                future = dask_client.submit(_invert_task, shape_keys[a], shape_keys[b],
+                                            matched.get((b, a), records.get((b, a))), a, b, map_path, settings,
+                                            ground_truth, key=key)
+                futures[future], inverses[a, b] = (a, b, map_path), future
             for a, b in todo:
                 if hub is None or hub in (a, b):
                     continue
                 map_path = str(out / "maps" / map_name(a, b))
-                steps = [matched.get(step, records.get(step)) for step in ((a, hub), (hub, b))]
+                steps = [matched.get((a, hub), records.get((a, hub))),
+                         inverses.get((hub, b), records.get((hub, b)))]
                 key = f"compose-{_task_key(a + chr(0) + b, settings, options, ground_truth, map_path, hub)}"
                 future = dask_client.submit(_compose_task, shape_keys[a], shape_keys[b], *steps, a, b, hub,
                                             map_path, settings, ground_truth, key=key)
@@ -239,8 +252,8 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
                     record = future.result()
                 except Exception as exc:  # noqa: BLE001 - e.g. KilledWorker: the pair crashed its worker
                     record = dict(_record(*futures[future]), error=_one_line(exc))
-                    if hub is not None and hub not in futures[future][:2]:
-                        record["via"] = hub
+                    if hub is not None and futures[future][1] != hub:
+                        record.update(via=hub, made="inverse" if futures[future][0] == hub else "composition")
                 future.release()
                 records[(record["source"], record["target"])] = record
                 done, failed = done + 1, failed + (record["status"] != DONE)
@@ -279,12 +292,15 @@ class _Estimate:
         return (now - self.start) / max(sum(self.done), 1) * sum(self.left)
 
 
-def _check_hub(hub: str, pairs: list[tuple[str, str]]) -> str:
+def _check_hub(hub: str, pairs: list[tuple[str, str]], options: dict) -> str:
     """``hub`` as spelled in ``pairs`` (or "auto"), checked: the pairs are every ordered pair of their shapes."""
     shapes = sorted({p for pair in pairs for p in pair})
     if set(pairs) != set(all_pairs(shapes)) or len(shapes) < 3:
         raise ParameterError("Mapping through a hub needs every ordered pair of at least three shapes "
                              "(meshcorr.collection.all_pairs, or meshcorr batch --all-pairs).")
+    if options.get("partial") is not None:
+        raise ParameterError("A hub composes whole-shape maps: it does not go with partial (each shape "
+                             "a part of every other); drop --hub or --partial.")
     if hub == "auto":
         return hub
     same = [p for p in shapes if os.path.abspath(p) == os.path.abspath(str(hub))]
@@ -439,7 +455,7 @@ def _compose_task(source, target, to_hub: dict | None, from_hub: dict | None, so
     from .consistency import compose
     from .io import read_map, write_map
 
-    record = dict(_record(source_path, target_path, map_path), via=hub)
+    record = dict(_record(source_path, target_path, map_path), via=hub, made="composition")
     for step, (a, b) in ((to_hub, (source_path, hub)), (from_hub, (hub, target_path))):
         if step is None or step["status"] != DONE:
             reason = "was not mapped" if step is None else f"failed: {step['error']}"
@@ -462,6 +478,38 @@ def _compose_task(source, target, to_hub: dict | None, from_hub: dict | None, so
     return record
 
 
+def _invert_task(hub, target, onto_hub: dict | None, hub_path: str, target_path: str, map_path: str,
+                 settings: dict, ground_truth: str | None) -> dict:
+    """Worker: the hub's map onto a shape, the inverse of that shape's map onto the hub, written; its record."""
+    from .consistency import invert
+    from .io import read_map, write_map
+
+    record = dict(_record(hub_path, target_path, map_path), via=hub_path, made="inverse")
+    if onto_hub is None or onto_hub["status"] != DONE:
+        reason = "was not mapped" if onto_hub is None else f"failed: {onto_hub['error']}"
+        record["error"] = (f"Inverted from the map {Path(target_path).name} -> {Path(hub_path).name}, "
+                           f"which {reason}")[:300]
+        return record
+    if _failed_shape(record, (hub, hub_path), (target, target_path)):
+        return record
+    try:
+        start, cpu = time.perf_counter(), time.process_time()
+        mesh = hub.mesh
+        points = np.full((mesh.n_original, 3), np.nan)  # the input numbering, which the maps use
+        points[mesh.kept] = mesh.vertices
+        inverse = invert(read_map(onto_hub["map"]), points)
+        write_map(map_path, inverse)
+        record["seconds"], record["cpu_seconds"] = time.perf_counter() - start, time.process_time() - cpu
+        if ground_truth is not None:
+            with single_blas_thread():
+                record["mean_error"] = _mean_error(hub, target, inverse, hub_path, target_path, ground_truth,
+                                                   settings["geodesic"])
+        record["status"] = DONE
+    except Exception as exc:  # noqa: BLE001 - a failed pair is a record, never the end of the batch
+        record["error"] = _one_line(exc)
+    return record
+
+
 def _failed_shape(record: dict, *shapes) -> bool:
     """Whether a ``(shape, path)`` failed its preparation; if so its message goes into ``record["error"]``."""
     for shape, path in shapes:
@@ -475,7 +523,7 @@ def _failed_shape(record: dict, *shapes) -> bool:
 def _record(source_path: str, target_path: str, map_path: str) -> dict:
     """The record of a pair not (yet) mapped: status "failed", no times, no error message."""
     return {"source": source_path, "target": target_path, "map": map_path, "status": FAILED, "seconds": None,
-            "cpu_seconds": None, "mean_error": None, "error": ""}
+            "cpu_seconds": None, "mean_error": None, "error": "", "made": "match"}
 
 
 def _in_pair_mode(source: PreparedShape, target: PreparedShape, settings: dict, options: dict):

@@ -33,10 +33,11 @@ error and writes maps made consistent through the collection (see
 meshcorr.consistency).
 
 --all-pairs with --hub SHAPE (or --hub auto: the shape whose Laplace-Beltrami
-spectrum is most like the others') matches only the 2(n-1) pairs to and from
-that shape and composes every other map through it (SOURCE -> hub -> TARGET):
-about n/2 times fewer matches, and maps that agree with each other. A wrong
-map to or from the hub is repeated in every map composed with it.
+spectrum is most like the others') matches only the n-1 pairs from each shape
+onto that hub, inverts them for the hub's maps onto the shapes, and composes
+every other map through it (SOURCE -> hub -> TARGET): n times fewer matches,
+and maps that agree with each other ("via" and "made" columns of the
+summary). A wrong map onto the hub is repeated in every map made with it.
 """
 
 
@@ -59,8 +60,8 @@ def add_parser(sub) -> None:
                    help="keep prepared shapes in this on-disk cache (no DIR: the default cache, "
                         "see 'meshcorr cache info')")
     p.add_argument("--hub", metavar="SHAPE|auto",
-                   help="with --all-pairs: match only the pairs to and from SHAPE (auto: the shape most like "
-                        "the others by its spectrum) and compose the other maps through it")
+                   help="with --all-pairs: match each shape onto SHAPE only (auto: the shape most like the "
+                        "others by its spectrum), and invert and compose those maps for the others")
     p.add_argument("--consistency", action="store_true",
                    help="with --all-pairs: cycle-consistency error and consistent maps (consistent/)")
     g = p.add_argument_group("method options (as in 'meshcorr match')")
@@ -178,9 +179,9 @@ def run(args) -> int:
               f"see {report['path']}", file=sys.stderr)
     if not args.quiet:
         hubs = {r["via"] for r in records if r.get("via")}
-        composed = sum(bool(r.get("via")) and r["status"] == "ok" for r in records)
+        made = sum(bool(r.get("via")) and r["status"] == "ok" for r in records)
         print(f"meshcorr: {len(records) - len(failed)} of {len(records)} pairs mapped into {args.out}"
-              + (f" ({composed} composed through {', '.join(sorted(hubs))})" if hubs else "")
+              + (f" ({made} made through {', '.join(sorted(hubs))})" if hubs else "")
               + (f"; {len(failed)} failed, see the 'error' column of summary.csv" if failed else ""),
               file=sys.stderr)
     if failed:

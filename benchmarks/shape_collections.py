@@ -11,9 +11,10 @@ ordered pairs:
     worker processes: wall seconds and seconds per map;
 (c) pyFM's automatic pipeline (``benchmarks/tosca_symmetry.py::pyfm_map``) on
     ``--pyfm-pairs`` sampled pairs, in this process: seconds per map;
-(d) ``meshcorr batch --all-pairs --hub auto`` on 2 workers: the 2(n-1) maps to
-    and from the spectral medoid matched, the others composed through it
-    (:mod:`meshcorr.consistency`): wall seconds per map and the maps' error.
+(d) ``meshcorr batch --all-pairs --hub auto`` on 2 workers: the n-1 maps onto
+    the spectral medoid matched, the others made from them (inverted, then
+    composed; :mod:`meshcorr.consistency`): wall seconds per map and the
+    maps' error.
 
 Also: seconds to prepare one shape and to match one prepared pair (medians,
 in this process), the mean geodesic error against TOSCA's ground truth of

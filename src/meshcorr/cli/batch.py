@@ -37,7 +37,9 @@ spectrum is most like the others') matches only the n-1 pairs from each shape
 onto that hub, inverts them for the hub's maps onto the shapes, and composes
 every other map through it (SOURCE -> hub -> TARGET): n times fewer matches,
 and maps that agree with each other ("via" and "made" columns of the
-summary). A wrong map onto the hub is repeated in every map made with it.
+summary). A wrong map onto the hub is repeated in every map made with it:
+use it for one shape in many poses, not for shapes of different builds or
+species (measured in benchmarks/RESULTS-collections.md).
 """
 
 

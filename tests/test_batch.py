@@ -109,7 +109,7 @@ def test_a_batch_through_a_hub_matches_the_hub_pairs_and_composes_the_others(clu
     assert records[1]["via"] == hub and totals[0] == 1 and all(r["status"] == "ok" for r in again)
     np.testing.assert_array_equal(read_map(maps_path), maps[records[1]["source"], records[1]["target"]])
     # The CLI: the automatic hub is the spectral medoid of the four poses, and the summary says so.
-    dna = {p: shape_dna(*_spectrum(p)) for p in paths}
+    dna = {p: shape_dna(meshcorr.as_mesh(p)) for p in paths}
     medoid = spectral_medoid(dna)
     assert main(["batch", "--all-pairs", *paths, "--hub", "auto", "--out", str(tmp_path / "auto"),
                  "--scheduler", cluster.scheduler.address]) == 0
@@ -118,13 +118,6 @@ def test_a_batch_through_a_hub_matches_the_hub_pairs_and_composes_the_others(clu
     assert {r["via"] for r in summary if r.get("via")} == {medoid}
     with pytest.raises(ParameterError, match="holds results made with other settings"):
         batch(all_pairs(paths), tmp_path / "auto", client=cluster, hub=paths[0])
-
-
-def _spectrum(path: str) -> tuple[np.ndarray, float]:
-    from meshcorr.refine import laplace_basis
-
-    mesh = meshcorr.as_mesh(path)
-    return laplace_basis(mesh, 40, random_state=0)[0], mesh.area
 
 
 def test_a_hub_pair_that_fails_fails_the_maps_composed_through_it(cluster, shapes, tmp_path):
@@ -174,12 +167,17 @@ def test_hub_error_paths(shapes, tmp_path, capsys):
         batch(all_pairs(paths[:3]), tmp_path, hub="auto", partial="source")
     with pytest.raises(ParameterError, match="at least one shape"):
         spectral_medoid({})
+    from meshcorr.consistency import _positive
+
     for values in ([0.0], [0.0, -1.0], [0.0, np.nan]):
         with pytest.raises(ParameterError, match="Shape-DNA needs"):
-            shape_dna(np.array(values), 1.0)
-    # Scale-free: the same spectrum at another scale is the same Shape-DNA; the medoid of three
-    # spectra on a line is the middle one.
-    np.testing.assert_allclose(shape_dna(np.array([0.0, 4.0, 8.0]) / 4.0, 4.0), [4.0, 8.0])
+            _positive(np.array(values))
+    # Scale-free: a shape three times larger has the same Shape-DNA; the medoid of three spectra
+    # on a line is the middle one.
+    shape = ds.creature(resolution=1)
+    small, large = (shape_dna(meshcorr.Mesh(scale * shape.vertices, shape.faces), 12) for scale in (1.0, 3.0))
+    assert len(small) == 11
+    np.testing.assert_allclose(large, small, rtol=1e-6)
     line = {"a": np.array([1.0, 2.0]), "b": np.array([2.0, 4.0]), "c": np.array([4.0, 8.0])}
     assert spectral_medoid(line) == "b" and spectral_medoid({"only": np.array([1.0])}) == "only"
 

@@ -324,13 +324,11 @@ def _auto_hub(dask_client, shape_keys: dict, settings: dict, options: dict) -> s
 def _dna_task(shape, settings: dict):
     """Worker: :func:`meshcorr.consistency.shape_dna` of a prepared shape (None for a failed preparation)."""
     from .consistency import shape_dna
-    from .refine import laplace_basis
 
     if not isinstance(shape, PreparedShape):
         return None
     with single_blas_thread():
-        values, _ = laplace_basis(shape.mesh, settings["refine_k"], random_state=settings["random_state"])
-    return shape_dna(values, shape.mesh.area)
+        return shape_dna(shape.mesh, settings["refine_k"], random_state=settings["random_state"])
 
 
 def _import_distributed():

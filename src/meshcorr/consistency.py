@@ -180,19 +180,29 @@ def choose_hub(maps: Maps, meshes: Mapping[str, Mesh], *, n_points: int = 200,
     return best
 
 
-def shape_dna(eigenvalues: np.ndarray, area: float) -> np.ndarray:
-    """``(k - 1,)``: the Laplace-Beltrami eigenvalues after the zero one, times the area (scale-free).
+def shape_dna(mesh: Mesh, k: int = 40, *, random_state: int | None = 0) -> np.ndarray:
+    """``(k - 1,)``: the mesh's Laplace-Beltrami eigenvalues at unit area, the zero one dropped (scale-free).
 
     Parameters
     ----------
-    eigenvalues : (k,) float
-        Ascending eigenvalues of the mesh's Laplace-Beltrami operator,
-        the first one (about 0) dropped here.
-    area : float
-        The mesh's surface area: :math:`\\lambda_i \\cdot A` does not change
-        with a uniform scale of the shape.
+    mesh : Mesh
+        A triangle mesh or a point cloud (its robust Laplacian).
+    k : int
+        Eigenvalues computed (:func:`meshcorr.refine.laplace_basis`, cached
+        on the mesh: the refinement's basis when ``k`` is its size). They are
+        those of the shape scaled to unit area, :math:`\\lambda_i A`, so the
+        Shape-DNA does not change with a uniform scale.
+    random_state : int or None
+        Seed of the eigensolver's start vector.
     """
-    values = np.asarray(eigenvalues, dtype=np.float64)[1:] * float(area)
+    from .refine import laplace_basis
+
+    return _positive(laplace_basis(mesh, k, random_state=random_state)[0])
+
+
+def _positive(eigenvalues: np.ndarray) -> np.ndarray:
+    """The eigenvalues after the first, checked finite and positive."""
+    values = np.asarray(eigenvalues, dtype=np.float64)[1:]
     if values.size == 0 or not np.all(np.isfinite(values)) or np.any(values <= 0):
         raise ParameterError("A Shape-DNA needs at least two finite eigenvalues, the ones after the "
                              "first positive.")

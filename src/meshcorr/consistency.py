@@ -30,10 +30,11 @@ from the start (``meshcorr batch --hub``) matches only the :math:`n-1` pairs
 from each shape onto the hub; the hub's map onto a shape B is the
 :func:`invert` of B's map onto the hub, and every other map is composed,
 :math:`f_{AB} = f_{HB} \\circ f_{AH}` (:func:`compose`). Inverting measured as
-accurate as matching the hub onto each shape (TOSCA michael, cat and dog:
-0.0486 / 0.0545 / 0.0475 with both directions matched, 0.0485 / 0.0539 /
-0.0473 with one matched and inverted; ``benchmarks/RESULTS-collections.md``)
-at half the matches. The batch's automatic hub (:func:`spectral_medoid`) is the shape whose Laplace-Beltrami
+accurate as matching the hub onto each shape (TOSCA michael, cat and dog
+through michael3, cat3 and dog5: 0.0486 / 0.0545 / 0.0475 with both
+directions matched, 0.0485 / 0.0539 / 0.0473 with one matched and inverted;
+``benchmarks/RESULTS-collections.md``) at half the matches. The batch's
+automatic hub (:func:`spectral_medoid`) is the shape whose Laplace-Beltrami
 spectrum is nearest to all the others' (the medoid of the "Shape-DNA": M.
 Reuter, F.-E. Wolter, N. Peinecke, "Laplace-Beltrami spectra as 'Shape-DNA'
 of surfaces and solids", Computer-Aided Design 38, 2006): the shape most

@@ -215,7 +215,7 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
                 hub = _auto_hub(dask_client, shape_keys, settings, options)
             futures, matched = {}, {}
             for a, b in todo:
-                if hub is not None and b != hub:
+                if _made_how(a, b, hub) != "match":
                     continue  # made below, from the maps onto the hub
                 map_path = str(out / "maps" / map_name(a, b))
                 key = f"match-{_task_key(a + chr(0) + b, settings, options, ground_truth, map_path)}"
@@ -224,7 +224,7 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
                 futures[future], matched[a, b] = (a, b, map_path), future
             inverses = {}
             for a, b in todo:
-                if hub is None or a != hub:
+                if _made_how(a, b, hub) != "inverse":
                     continue
                 map_path = str(out / "maps" / map_name(a, b))
                 key = f"invert-{_task_key(a + chr(0) + b, settings, options, ground_truth, map_path)}"
@@ -233,7 +233,7 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
                                             ground_truth, key=key)
                 futures[future], inverses[a, b] = (a, b, map_path), future
             for a, b in todo:
-                if hub is None or hub in (a, b):
+                if _made_how(a, b, hub) != "composition":
                     continue
                 map_path = str(out / "maps" / map_name(a, b))
                 steps = [matched.get((a, hub), records.get((a, hub))),
@@ -244,20 +244,17 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
                 futures[future] = (a, b, map_path)
             start, done, failed, written = time.perf_counter(), 0, 0, time.perf_counter()
             eta = _Estimate(len(matched), len(futures) - len(matched), start)
-            matched_futures = set(matched.values())
             if progress is not None:
                 progress(0, len(todo), 0, None)
             for future in distributed.as_completed(list(futures)):
                 try:
                     record = future.result()
                 except Exception as exc:  # noqa: BLE001 - e.g. KilledWorker: the pair crashed its worker
-                    record = dict(_record(*futures[future]), error=_one_line(exc))
-                    if hub is not None and futures[future][1] != hub:
-                        record.update(via=hub, made="inverse" if futures[future][0] == hub else "composition")
+                    record = dict(_record(*futures[future], hub), error=_one_line(exc))
                 future.release()
                 records[(record["source"], record["target"])] = record
                 done, failed = done + 1, failed + (record["status"] != DONE)
-                eta.finished(future in matched_futures)
+                eta.finished(record["made"] == "match")
                 if time.perf_counter() - written > SUMMARY_EVERY:  # a rerun redoes the pairs not yet written
                     _write_summary(out, [records[p] for p in pairs if p in records])
                     written = time.perf_counter()
@@ -451,57 +448,57 @@ def _compose_task(source, target, to_hub: dict | None, from_hub: dict | None, so
                   target_path: str, hub: str, map_path: str, settings: dict, ground_truth: str | None) -> dict:
     """Worker: the map source -> hub -> target from the two matched maps' records, written; its record."""
     from .consistency import compose
-    from .io import read_map, write_map
+    from .io import read_map
 
-    record = dict(_record(source_path, target_path, map_path), via=hub, made="composition")
+    record = _record(source_path, target_path, map_path, hub)
     for step, (a, b) in ((to_hub, (source_path, hub)), (from_hub, (hub, target_path))):
         if step is None or step["status"] != DONE:
             reason = "was not mapped" if step is None else f"failed: {step['error']}"
             record["error"] = f"Composed through the hub: its map {Path(a).name} -> {Path(b).name} {reason}"[:300]
             return record
-    if _failed_shape(record, (source, source_path), (target, target_path)):
-        return record
-    try:
-        start, cpu = time.perf_counter(), time.process_time()
-        mapping = compose(read_map(to_hub["map"]), read_map(from_hub["map"]))  # f_HB o f_AH
-        write_map(map_path, mapping)
-        record["seconds"], record["cpu_seconds"] = time.perf_counter() - start, time.process_time() - cpu
-        if ground_truth is not None:
-            with single_blas_thread():
-                record["mean_error"] = _mean_error(source, target, mapping, source_path, target_path,
-                                                   ground_truth, settings["geodesic"])
-        record["status"] = DONE
-    except Exception as exc:  # noqa: BLE001 - a failed pair is a record, never the end of the batch
-        record["error"] = _one_line(exc)
-    return record
+    # f_HB o f_AH
+    return _made_map(record, source, target, lambda: compose(read_map(to_hub["map"]), read_map(from_hub["map"])),
+                     settings, ground_truth)
 
 
 def _invert_task(hub, target, onto_hub: dict | None, hub_path: str, target_path: str, map_path: str,
                  settings: dict, ground_truth: str | None) -> dict:
     """Worker: the hub's map onto a shape, the inverse of that shape's map onto the hub, written; its record."""
     from .consistency import invert
-    from .io import read_map, write_map
+    from .io import read_map
 
-    record = dict(_record(hub_path, target_path, map_path), via=hub_path, made="inverse")
+    record = _record(hub_path, target_path, map_path, hub_path)
     if onto_hub is None or onto_hub["status"] != DONE:
         reason = "was not mapped" if onto_hub is None else f"failed: {onto_hub['error']}"
         record["error"] = (f"Inverted from the map {Path(target_path).name} -> {Path(hub_path).name}, "
                            f"which {reason}")[:300]
         return record
-    if _failed_shape(record, (hub, hub_path), (target, target_path)):
-        return record
-    try:
-        start, cpu = time.perf_counter(), time.process_time()
+
+    def inverse() -> np.ndarray:
         mesh = hub.mesh
         points = np.full((mesh.n_original, 3), np.nan)  # the input numbering, which the maps use
         points[mesh.kept] = mesh.vertices
-        inverse = invert(read_map(onto_hub["map"]), points)
-        write_map(map_path, inverse)
+        return invert(read_map(onto_hub["map"]), points)
+
+    return _made_map(record, hub, target, inverse, settings, ground_truth)
+
+
+def _made_map(record: dict, source, target, make: Callable[[], np.ndarray], settings: dict,
+              ground_truth: str | None) -> dict:
+    """Worker: ``make()`` the map of ``record`` from maps already written, write it, score it; the record."""
+    from .io import write_map
+
+    if _failed_shape(record, (source, record["source"]), (target, record["target"])):
+        return record
+    try:
+        start, cpu = time.perf_counter(), time.process_time()
+        mapping = make()
+        write_map(record["map"], mapping)
         record["seconds"], record["cpu_seconds"] = time.perf_counter() - start, time.process_time() - cpu
         if ground_truth is not None:
             with single_blas_thread():
-                record["mean_error"] = _mean_error(hub, target, inverse, hub_path, target_path, ground_truth,
-                                                   settings["geodesic"])
+                record["mean_error"] = _mean_error(source, target, mapping, record["source"], record["target"],
+                                                   ground_truth, settings["geodesic"])
         record["status"] = DONE
     except Exception as exc:  # noqa: BLE001 - a failed pair is a record, never the end of the batch
         record["error"] = _one_line(exc)
@@ -518,10 +515,21 @@ def _failed_shape(record: dict, *shapes) -> bool:
     return False
 
 
-def _record(source_path: str, target_path: str, map_path: str) -> dict:
+def _record(source_path: str, target_path: str, map_path: str, hub: str | None = None) -> dict:
     """The record of a pair not (yet) mapped: status "failed", no times, no error message."""
-    return {"source": source_path, "target": target_path, "map": map_path, "status": FAILED, "seconds": None,
-            "cpu_seconds": None, "mean_error": None, "error": "", "made": "match"}
+    record = {"source": source_path, "target": target_path, "map": map_path, "status": FAILED, "seconds": None,
+              "cpu_seconds": None, "mean_error": None, "error": "",
+              "made": _made_how(source_path, target_path, hub)}
+    if record["made"] != "match":
+        record["via"] = hub
+    return record
+
+
+def _made_how(source: str, target: str, hub: str | None) -> str:
+    """How a batch makes the map of a pair: "match", or with a hub "inverse" (from the hub) or "composition"."""
+    if hub is None or target == hub:
+        return "match"
+    return "inverse" if source == hub else "composition"
 
 
 def _in_pair_mode(source: PreparedShape, target: PreparedShape, settings: dict, options: dict):

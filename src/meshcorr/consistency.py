@@ -100,7 +100,7 @@ def invert(mapping: np.ndarray, target_points: np.ndarray) -> np.ndarray:
     present = np.isfinite(points).all(axis=1)
     sources = np.flatnonzero(mapping >= 0)
     sources = sources[present[mapping[sources]]]
-    if sources.size and present.any():
+    if sources.size:  # the images of these are present vertices
         out[present] = sources[cKDTree(points[mapping[sources]]).query(points[present])[1]]
     return out
 
@@ -143,14 +143,19 @@ def cycle_errors(maps: Maps, meshes: Mapping[str, Mesh], triples: Sequence[tuple
     for t, (a, b, c) in enumerate(triples):
         n_a = len(maps[a, c])
         sample = rng.choice(n_a, size=min(n_points, n_a), replace=False)
-        two_step, direct = compose(maps[a, b][sample], maps[b, c]), maps[a, c][sample]
-        mapped = (two_step >= 0) & (direct >= 0)  # vertices some map leaves out do not count
-        if not mapped.any():
+        two_step, direct = _both_mapped(compose(maps[a, b][sample], maps[b, c]), maps[a, c][sample])
+        if not len(direct):
             out[t] = np.nan
             continue
-        distances = cache.pair_distances(meshes[c], two_step[mapped], direct[mapped])
+        distances = cache.pair_distances(meshes[c], two_step, direct)
         out[t] = distances.mean() / np.sqrt(meshes[c].area)
     return out
+
+
+def _both_mapped(two_step: np.ndarray, direct: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The entries where both maps send the sampled vertex somewhere (vertices a map leaves out do not count)."""
+    mapped = (two_step >= 0) & (direct >= 0)
+    return two_step[mapped], direct[mapped]
 
 
 def choose_hub(maps: Maps, meshes: Mapping[str, Mesh], *, n_points: int = 200,
@@ -167,10 +172,9 @@ def choose_hub(maps: Maps, meshes: Mapping[str, Mesh], *, n_points: int = 200,
             n_a = len(maps[a, b])
             sample = rng.choice(n_a, size=min(n_points, n_a), replace=False)
             V = meshes[b].vertices
-            two_step, direct = compose(maps[a, hub][sample], maps[hub, b]), maps[a, b][sample]
-            mapped = (two_step >= 0) & (direct >= 0)
-            if mapped.any():
-                gap = np.linalg.norm(V[two_step[mapped]] - V[direct[mapped]], axis=1)
+            two_step, direct = _both_mapped(compose(maps[a, hub][sample], maps[hub, b]), maps[a, b][sample])
+            if len(direct):
+                gap = np.linalg.norm(V[two_step] - V[direct], axis=1)
                 scores.append(gap.mean() / np.sqrt(meshes[b].area))
         covers = all((a, hub) in maps and (hub, a) in maps for a in names if a != hub)
         if scores and covers and np.mean(scores) < best_score:

@@ -12,6 +12,7 @@ import pytest
 import trimesh
 
 import meshcorr
+from meshcorr import cuts
 from meshcorr import datasets as ds
 from meshcorr.collection import all_pairs, batch, map_name, read_pairs, template_pairs
 from meshcorr.cli import main
@@ -118,6 +119,27 @@ def test_a_batch_through_a_hub_matches_the_hub_pairs_and_composes_the_others(clu
     assert {r["via"] for r in summary if r.get("via")} == {medoid}
     with pytest.raises(ParameterError, match="holds results made with other settings"):
         batch(all_pairs(paths), tmp_path / "auto", client=cluster, hub=paths[0])
+
+
+def test_a_hub_batch_of_shapes_with_holes_maps_their_own_vertices(cluster, tmp_path):
+    # The same holes in three poses (one vertex numbering: the truth is the identity); the hub's holes
+    # are closed while it is matched, and its inverse maps cover its own vertices only.
+    rest = ds.creature(resolution=1)
+    _, kept = cuts.punch_holes(meshcorr.as_mesh((rest.vertices, rest.faces)), n_holes=4, hole_area=0.01,
+                               random_state=0)
+    keep = np.isin(rest.faces, kept).all(axis=1)  # the faces left: the same in every pose
+    paths = []
+    for i, pose in enumerate(POSES[:3]):
+        shape = ds.creature(resolution=1, pose=pose)
+        holed, _ = cuts.submesh(meshcorr.as_mesh((shape.vertices, shape.faces)), keep)
+        paths.append(str(tmp_path / f"h{i}.off"))
+        trimesh.Trimesh(holed.vertices, holed.faces, process=False).export(paths[-1])
+    records = batch(all_pairs(paths), tmp_path / "out", client=cluster, ground_truth="identity", hub=paths[1])
+    assert len(records) == 6 and all(r["status"] == "ok" for r in records)
+    for record in records:
+        mapping = read_map(record["map"])
+        assert mapping.shape == (len(kept),) and 0 <= mapping.min() and mapping.max() < len(kept)
+        assert record["mean_error"] < 0.05
 
 
 def test_a_hub_pair_that_fails_fails_the_maps_composed_through_it(cluster, shapes, tmp_path):

@@ -12,7 +12,7 @@ from meshcorr import cuts
 from meshcorr import datasets as ds
 from meshcorr.boundary import boundary_distance, mesh_boundary
 from meshcorr.cli import main
-from meshcorr.errors import PartialityError, PartialShapeWarning
+from meshcorr.errors import PartialityError, PartialShapeWarning, PreparedShapeError
 from meshcorr.evaluation import geodesic_errors
 from meshcorr.landmarks import farthest_point_sampling
 from meshcorr.mesh import as_mesh
@@ -176,9 +176,16 @@ def test_result_with_a_matched_region_saves_and_loads(plane_part, tmp_path):
 def test_prepared_shapes_give_the_same_partial_map(pair, plane_part):
     source, target, truth, back = pair
     part, kept, result = plane_part
-    again = meshcorr.match(meshcorr.prepare(part), meshcorr.prepare(target), partial="source")
+    again = meshcorr.match(meshcorr.prepare(part, fill_holes=False), meshcorr.prepare(target, fill_holes=False),
+                           partial="source")
     np.testing.assert_array_equal(again.map, result.map)
     np.testing.assert_array_equal(again.matched_region, result.matched_region)
+
+
+def test_a_shape_prepared_with_its_holes_closed_is_refused_for_a_partial_match(plane_part, pair):
+    part = plane_part[0]
+    with pytest.raises(PreparedShapeError, match=r"fill_holes=True \(asked: False\).*fill_holes=False"):
+        meshcorr.match(meshcorr.prepare(part), pair[1], partial="source")
 
 
 def _write(path, mesh):

@@ -58,6 +58,7 @@ from .benchmark import _check_run_settings, _one_line
 from .errors import MeshcorrError, ParameterError
 from .io import atomic_write
 from .modes import SCALABLE_ABOVE
+from .holes import fills, unfilled
 from .prepared import SHAPE_SETTINGS, PreparedShape, shape_settings
 
 #: ``progress(done, total, failed, seconds_left)``: called after each finished pair
@@ -367,6 +368,8 @@ def _split_options(options: dict) -> tuple[dict, dict]:
                              "such pairs one by one with meshcorr.match(..., landmarks=...)).")
     shape = {key: given.pop(key, default) for key, default in SHAPE_SETTINGS.items()}
     settings = shape_settings(**shape)
+    settings["fill_holes"] = fills(settings["fill_holes"], partial=given.get("partial"),
+                                   bijective=given.get("bijective", False))
     # Every other option is checked before any work: match validates all its options before it
     # loads the meshes, so a dry call without meshes raises ParameterError for a bad option and
     # MeshError (no mesh) once they all passed.
@@ -475,7 +478,7 @@ def _invert_task(hub, target, onto_hub: dict | None, hub_path: str, target_path:
         return record
 
     def inverse() -> np.ndarray:
-        mesh = hub.mesh
+        mesh = unfilled(hub.mesh)  # without the caps of its holes (meshcorr.holes)
         points = np.full((mesh.n_original, 3), np.nan)  # the input numbering, which the maps use
         points[mesh.kept] = mesh.vertices
         return invert(read_map(onto_hub["map"]), points)
@@ -549,7 +552,7 @@ def _mean_error(source, target, mapping, source_path, target_path, ground_truth,
     from .evaluation import evaluate_map
     from .ground_truth import load_ground_truth
 
-    full_source, full_target = source.mesh.n_original, target.mesh
+    full_source, full_target = source.mesh.n_input, unfilled(target.mesh)
     spec = ground_truth if ground_truth == "identity" else [
         Path(ground_truth) / f"{Path(p).stem}.vts" for p in (source_path, target_path)]
     truth = load_ground_truth(spec, n_source=full_source, n_target=full_target.n_original)

@@ -102,11 +102,11 @@ def check_landmarks(landmarks, source: Mesh, target: Mesh) -> np.ndarray | None:
                                  f"{table.reshape(-1)[:4].tolist()}...")
     table = table.astype(np.int64)
     for column, mesh, side in ((0, source, "source"), (1, target, "target")):
-        bad = (table[:, column] < 0) | (table[:, column] >= mesh.n_original)
+        bad = (table[:, column] < 0) | (table[:, column] >= mesh.n_input)  # not on a hole's cap
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
             raise ParameterError(f"Landmark {row} has {side} index {int(table[row, column])}, outside the "
-                                 f"{side} mesh's vertices [0, {mesh.n_original}). Indices are 0-based.")
+                                 f"{side} mesh's vertices [0, {mesh.n_input}). Indices are 0-based.")
     values, counts = np.unique(table[:, 0], return_counts=True)
     if (counts > 1).any():
         raise ParameterError(f"Source vertex {int(values[counts > 1][0])} has more than one landmark; "

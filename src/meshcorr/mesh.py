@@ -33,6 +33,11 @@ class Mesh:
     kept : (n,) int, optional
         Original index of each vertex when vertices were dropped on input
         (``largest_component=True``); ``arange(n)`` otherwise.
+    n_original : int, optional
+        Vertices of the input, plus the caps (default ``n``).
+    n_caps : int
+        Vertices added at the end to close holes (:func:`meshcorr.holes.fill_holes`):
+        their ``kept`` values are ``n_input ... n_original - 1``.
 
     Notes
     -----
@@ -41,13 +46,14 @@ class Mesh:
     """
 
     def __init__(self, vertices: np.ndarray, faces: np.ndarray, *, name: str = "mesh",
-                 kept: np.ndarray | None = None, n_original: int | None = None) -> None:
+                 kept: np.ndarray | None = None, n_original: int | None = None, n_caps: int = 0) -> None:
         self.vertices = np.array(vertices, dtype=np.float64)
         self.faces = np.array(faces, dtype=np.int64)
         if self.faces.size == 0:  # a point cloud
             self.faces = self.faces.reshape(0, 3)
         self.kept = np.arange(len(self.vertices)) if kept is None else np.asarray(kept, dtype=np.int64)
         self.n_original = len(self.vertices) if n_original is None else int(n_original)
+        self.n_caps = int(n_caps)
         for array in (self.vertices, self.faces, self.kept):
             array.flags.writeable = False
         self.name = name
@@ -56,6 +62,11 @@ class Mesh:
     @property
     def n_vertices(self) -> int:
         return len(self.vertices)
+
+    @property
+    def n_input(self) -> int:
+        """Vertices of the input the mesh was made from (``n_original`` without the caps)."""
+        return self.n_original - self.n_caps
 
     @property
     def is_cloud(self) -> bool:

@@ -37,6 +37,7 @@ from .orientation import mesh_orientation, orientation_score
 from .oriented_start import fit_oriented_map
 from .partial import (check_part_not_larger, check_partial_options, check_roles, geodesic_rows, invert_part_map,
                       match_part, part_region, partiality_suspicion)
+from .holes import fills, restrict, unfilled
 from .prepared import REFINE_K, PreparedShape, as_meshes, pair_shapes, pair_spectrum, shape_settings
 from .progress import as_progress
 from .refine import prefetch_bases, refine_map
@@ -75,7 +76,8 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
           method: str = "spectral", prealign: bool = True,
           symmetry: str = "auto", refine: bool = True, refine_k: int = REFINE_K, shells: bool = True,
           anchor_scale: str = "embedding", landmarks=None, extremities: bool = True,
-          oriented_starts: bool = False, partial: str | None = None, n_landmarks=_RENAMED) -> Correspondence:
+          oriented_starts: bool = False, partial: str | None = None, fill_holes: bool = True,
+          n_landmarks=_RENAMED) -> Correspondence:
     """Dense vertex correspondence from ``source`` to ``target``.
 
     Parameters
@@ -87,7 +89,8 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         skips the per-shape work and gives the same map as its mesh; it must
         have been prepared with this call's ``k``, ``geodesic``,
         ``scale_eigenvalues``, ``n_samples``, ``refine``, ``refine_k``,
-        ``largest_component``, ``random_state`` and the pair's mode.
+        ``largest_component``, ``random_state``, ``fill_holes`` (as this
+        call uses it: False with ``partial`` or ``bijective``) and the pair's mode.
     k : int
         Eigenpairs computed; the embedding has ``k - 1`` dimensions (paper: 6).
     geodesic : {"heat", "fmm", "exact", "dijkstra"}
@@ -199,6 +202,15 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         :class:`~meshcorr.errors.PartialityError`). When it is None and one
         shape has a long open boundary the other lacks,
         :class:`~meshcorr.errors.PartialShapeWarning` names the mode to use.
+    fill_holes : bool
+        Close the meshes' holes before matching: each simple boundary loop
+        gets a fan of triangles around a new centre vertex, and the map is
+        reported on the input's vertices only (a vertex sent onto a cap goes
+        to the nearest vertex of its hole's rim; :mod:`meshcorr.holes`).
+        Holes change geodesics, the Laplace-Beltrami functions and the
+        extremities; closed, a shape with holes maps about as well as
+        without them. Not done with ``partial`` (a part's boundary is its
+        cut) nor with ``bijective`` (the vertex counts must stay).
 
     Returns
     -------
@@ -219,7 +231,8 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
                              f"mode): pass n_samples={n_landmarks!r} instead.")
     settings = shape_settings(k=k, geodesic=geodesic, scale_eigenvalues=scale_eigenvalues, n_samples=n_samples,
                               refine=refine, refine_k=refine_k, largest_component=largest_component,
-                              random_state=random_state)
+                              random_state=random_state, fill_holes=fill_holes)
+    settings["fill_holes"] = fills(fill_holes, partial=partial, bijective=bijective)
     k, n_samples, refine_k = settings["k"], settings["n_samples"], settings["refine_k"]
     check_choice("reorder", reorder, REORDER_MODES)
     n_anchors = check_int("n_anchors", n_anchors, minimum=0)
@@ -240,7 +253,7 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
                                 n_anchors=n_anchors, anchor_weight=anchor_weight, anchor_scale=anchor_scale,
                                 largest_component=largest_component, mode=mode, n_samples=n_samples,
                                 max_memory=max_memory, scalable_above=scalable_above, refine=refine,
-                                refine_k=refine_k, random_state=random_state)
+                                refine_k=refine_k, random_state=random_state, fill_holes=False)
         return _match_partial(shapes, pairs, partial, spectral_options, extremities=extremities, timer=timer)
 
     mode = select_mode(mode, src.n_vertices, tgt.n_vertices, max_memory=max_memory,
@@ -251,7 +264,8 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         # Steps 1-3: geodesic distances, Gaussian affinities, scaled spectral embedding.
         spectra = [pair_spectrum(shape, settings, mode, timer) for shape in shapes]
         X, Y = spectra[0].embedding, spectra[1].embedding
-        suspicion = partiality_suspicion(src, tgt, spectra[0].max_geodesic, spectra[1].max_geodesic)
+        suspicion = partiality_suspicion(unfilled(src), unfilled(tgt), spectra[0].max_geodesic,
+                                         spectra[1].max_geodesic)
         if suspicion:  # a part given as a whole shape (meshcorr.partial)
             warnings.warn(suspicion, PartialShapeWarning, stacklevel=2)
 
@@ -327,10 +341,10 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
                   largest_component=largest_component, random_state=random_state, mode=mode,
                   n_samples=n_samples, max_memory=max_memory, symmetry=symmetry, refine=refine,
                   refine_k=refine_k, shells=shells, anchor_scale=anchor_scale, extremities=extremities,
-                  oriented_starts=oriented_starts,
+                  oriented_starts=oriented_starts, fill_holes=settings["fill_holes"],
                   landmarks=None if pairs is None else np.stack([src.kept[pairs[:, 0]], tgt.kept[pairs[:, 1]]],
                                                                 axis=1).tolist())
-    return Correspondence(
+    return restrict(Correspondence(  # without the holes' caps (meshcorr.holes)
         map=full_map, cost=full_cost, source=src, target=tgt,
         source_vertices=src.kept.copy(), target_vertices=tgt.kept.copy(),
         source_embedding=X, target_embedding=Y_configured, aligned_target_embedding=icp.warped,
@@ -341,7 +355,7 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         background_timings={} if bases.seconds is None else {"refine_bases": bases.seconds}, params=params,
         candidates=summaries, alternative_map=alternative_map, orientation_reliable=reliable,
         refine_history=refine_history, map_candidates=map_candidates,
-    )
+    ), src, tgt)
 
 
 def embedding_spread(spectrum) -> float:

@@ -26,7 +26,8 @@ File format (:meth:`PreparedShape.save`, version :data:`FORMAT_VERSION`)
     ``settings`` (:data:`SHAPE_SETTINGS` and the resolved ``mode``),
     ``mesh_sha256`` (:func:`mesh_digest`), ``name``, ``n_original``,
     ``cloud`` (whether the shape is a point cloud: then ``faces`` is empty,
-    shape ``(0, 3)``; format 2 on) and
+    shape ``(0, 3)``; format 2 on), ``n_caps`` (vertices added to close
+    holes, :mod:`meshcorr.holes`; format 3 on) and
     ``entries``, the structure of the cached values: ``{"array": NAME}``,
     ``{"tuple": [...]}``, ``{"float"|"int"|"bool"|"str": value}``,
     ``{"kdtree": NAME}`` (a :class:`scipy.spatial.cKDTree` rebuilt from its
@@ -52,23 +53,26 @@ from scipy.spatial import cKDTree
 from ._params import check_choice, check_int
 from .errors import ParameterError, PreparedShapeError
 from .geodesics import GEODESIC_METHODS
+from .holes import fill_holes
 from .mesh import Mesh, MeshLike, as_mesh
 from .modes import MODES, N_SAMPLES, SCALABLE_ABOVE, build_spectrum, resolve_memory, select_mode
 from .orientation import Orientation
 from .spectrum import Spectrum, dense_rows
 from .timing import StageTimer
 
-#: Version of the file format of :meth:`PreparedShape.save` (2: point clouds, the header's ``cloud``).
-FORMAT_VERSION = 2
+#: Version of the file format of :meth:`PreparedShape.save` (2: point clouds, the header's ``cloud``;
+#: 3: holes closed, the header's ``n_caps`` and the setting ``fill_holes``).
+FORMAT_VERSION = 3
 #: Laplace-Beltrami basis size of the ZoomOut refinement (see :mod:`meshcorr.refine`).
 REFINE_K = 40
 #: The options of :func:`meshcorr.match` that change what :func:`prepare` computes, with their defaults.
 SHAPE_SETTINGS = dict(k=6, geodesic="heat", scale_eigenvalues=True, n_samples=N_SAMPLES, refine=True,
-                      refine_k=REFINE_K, largest_component=False, random_state=0)
+                      refine_k=REFINE_K, largest_component=False, random_state=0, fill_holes=True)
 
 
 def shape_settings(*, k: int, geodesic: str, scale_eigenvalues: bool, n_samples: int, refine: bool,
-                   refine_k: int, largest_component: bool, random_state: int | None) -> dict:
+                   refine_k: int, largest_component: bool, random_state: int | None,
+                   fill_holes: bool = True) -> dict:
     """Validate the per-shape options (:data:`SHAPE_SETTINGS`) once, where they enter.
 
     Raises
@@ -80,7 +84,7 @@ def shape_settings(*, k: int, geodesic: str, scale_eigenvalues: bool, n_samples:
     check_choice("geodesic", geodesic, GEODESIC_METHODS)
     n_samples = check_int("n_samples", n_samples, minimum=k + 1)
     for name, value in (("scale_eigenvalues", scale_eigenvalues), ("refine", refine),
-                        ("largest_component", largest_component)):
+                        ("largest_component", largest_component), ("fill_holes", fill_holes)):
         if not isinstance(value, (bool, np.bool_)):
             raise ParameterError(f"The {name!r} parameter must be True or False. Got {value!r} instead.")
     refine_k = check_int("refine_k", refine_k, minimum=2)
@@ -88,7 +92,7 @@ def shape_settings(*, k: int, geodesic: str, scale_eigenvalues: bool, n_samples:
         random_state = check_int("random_state", random_state)
     return dict(k=k, geodesic=geodesic, scale_eigenvalues=bool(scale_eigenvalues), n_samples=n_samples,
                 refine=bool(refine), refine_k=refine_k, largest_component=bool(largest_component),
-                random_state=random_state)
+                random_state=random_state, fill_holes=bool(fill_holes))
 
 
 def mesh_digest(mesh: Mesh) -> str:
@@ -145,10 +149,12 @@ class PreparedShape:
         differ = [f"{key}={self.settings.get(key)!r} (asked: {wanted[key]!r})"
                   for key in sorted(wanted) if self.settings.get(key) != wanted[key]]
         if differ:
+            holes = (" (partial matching and one-to-one maps keep the holes: prepare with fill_holes=False)"
+                     if self.settings.get("fill_holes") and not wanted["fill_holes"] else "")
             raise PreparedShapeError(
                 f"The prepared {role} {self.mesh.name!r} was made with other settings: {', '.join(differ)}. "
-                "Prepare it again with these settings (meshcorr.prepare) or match with the settings it "
-                "was prepared for.")
+                f"Prepare it again with these settings (meshcorr.prepare){holes} or match with the settings "
+                "it was prepared for.")
 
     def save(self, path) -> None:
         """Write it to ``path`` (``.npz``, the format in the module docstring), atomically."""
@@ -173,7 +179,7 @@ class PreparedShape:
                    if (spec := _encode(value, arrays)) is not _SKIP and not _contains(spec, _SKIP)]
         header = dict(format=FORMAT_VERSION, meshcorr=_version(), settings=self.settings,
                       mesh_sha256=self.digest, name=self.mesh.name, n_original=self.mesh.n_original,
-                      cloud=self.mesh.is_cloud,
+                      n_caps=self.mesh.n_caps, cloud=self.mesh.is_cloud,
                       max_geodesic=self.spectrum.max_geodesic, entries=entries)
         arrays["header"] = np.frombuffer(json.dumps(header).encode(), dtype=np.uint8)
         buffer = io.BytesIO()
@@ -212,6 +218,8 @@ class PreparedShape:
         prepared = cls._from_arrays(header, arrays)
         if mesh is not None:
             other = as_mesh(mesh, largest_component=prepared.settings["largest_component"])
+            if prepared.settings["fill_holes"]:
+                other = fill_holes(other)
             if mesh_digest(other) != header["mesh_sha256"]:
                 raise PreparedShapeError(f"{path} was prepared for another mesh than {other.name}: prepare "
                                          "this mesh again (meshcorr.prepare) instead of loading that file.")
@@ -223,7 +231,7 @@ class PreparedShape:
     @classmethod
     def _from_arrays(cls, header: dict, arrays) -> PreparedShape:
         mesh = Mesh(arrays["vertices"], arrays["faces"], name=header["name"], kept=arrays["kept"],
-                    n_original=header["n_original"])
+                    n_original=header["n_original"], n_caps=header["n_caps"])
         if bool(header.get("cloud")) != mesh.is_cloud:
             raise PreparedShapeError(f"The prepared shape {mesh.name!r} says it is "
                                      f"{'a point cloud' if header.get('cloud') else 'a mesh'} but holds "
@@ -254,15 +262,17 @@ class PreparedShape:
 def prepare(mesh: MeshLike, *, k: int = 6, geodesic: str = "heat", scale_eigenvalues: bool = True,
             mode: str = "auto", n_samples: int = N_SAMPLES, refine: bool = True, refine_k: int = REFINE_K,
             largest_component: bool = False, random_state: int | None = 0, max_memory: int | str | None = None,
-            scalable_above: int = SCALABLE_ABOVE, name: str | None = None, cache=None) -> PreparedShape:
+            scalable_above: int = SCALABLE_ABOVE, name: str | None = None, cache=None,
+            fill_holes: bool = True) -> PreparedShape:
     """Everything per shape that :func:`meshcorr.match` needs, computed once.
 
     Parameters
     ----------
     mesh : path, trimesh.Trimesh, Mesh or (vertices, faces)
-    k, geodesic, scale_eigenvalues, n_samples, refine, refine_k, largest_component, random_state
+    k, geodesic, scale_eigenvalues, n_samples, refine, refine_k, largest_component, random_state, fill_holes
         As in :func:`meshcorr.match`; :func:`meshcorr.match` refuses a shape
-        prepared with other values.
+        prepared with other values (a shape for the partial mode or a
+        one-to-one map needs ``fill_holes=False``).
     mode : {"auto", "dense", "scalable"}
         As in :func:`meshcorr.match`, resolved for this mesh alone ("auto":
         dense up to ``scalable_above`` vertices). A pair runs in the mode
@@ -282,7 +292,7 @@ def prepare(mesh: MeshLike, *, k: int = 6, geodesic: str = "heat", scale_eigenva
     """
     settings = shape_settings(k=k, geodesic=geodesic, scale_eigenvalues=scale_eigenvalues, n_samples=n_samples,
                               refine=refine, refine_k=refine_k, largest_component=largest_component,
-                              random_state=random_state)
+                              random_state=random_state, fill_holes=fill_holes)
     check_choice("mode", mode, MODES)
     loaded = load_mesh(mesh, settings, name=name)
     mode = select_mode(mode, loaded.n_vertices, loaded.n_vertices, max_memory=resolve_memory(max_memory),
@@ -295,10 +305,14 @@ def prepare(mesh: MeshLike, *, k: int = 6, geodesic: str = "heat", scale_eigenva
 
 
 def load_mesh(shape: MeshLike, settings: dict, *, name: str | None) -> Mesh:
-    """The validated :class:`Mesh` of user input, with enough vertices for ``settings["k"]``."""
+    """The validated :class:`Mesh` of user input, with enough vertices for ``settings["k"]``.
+
+    Its holes are closed (:func:`meshcorr.holes.fill_holes`) when ``settings["fill_holes"]``.
+    """
     k = settings["k"]
-    return as_mesh(shape, name=name, largest_component=settings["largest_component"], min_vertices=k + 2,
+    mesh = as_mesh(shape, name=name, largest_component=settings["largest_component"], min_vertices=k + 2,
                    reason=f"The spectral embedding with k={k} needs at least {k + 2} vertices.")
+    return fill_holes(mesh) if settings["fill_holes"] else mesh
 
 
 def prepare_mesh(mesh: Mesh, settings: dict, mode: str, timer: StageTimer | None = None) -> PreparedShape:

@@ -34,7 +34,8 @@ def _light_copy(mesh: Mesh | None) -> Mesh | None:
     """The mesh without its large cached data (geodesic matrices); Laplace-Beltrami bases are kept."""
     if mesh is None:
         return None
-    copy = Mesh(mesh.vertices, mesh.faces, name=mesh.name, kept=mesh.kept, n_original=mesh.n_original)
+    copy = Mesh(mesh.vertices, mesh.faces, name=mesh.name, kept=mesh.kept, n_original=mesh.n_original,
+                n_caps=mesh.n_caps)
     copy._cache.update({key: value for key, value in mesh._cache.items() if key[0] == "laplace_basis"})
     return copy
 

@@ -85,6 +85,9 @@ class Settings:
     partial : {None, "source", "target"}
         Which shape is a part of the other (:mod:`meshcorr.partial`); None:
         both are whole.
+    fill_holes : bool
+        Close the meshes' holes before matching (:mod:`meshcorr.holes`);
+        not with ``partial`` or ``bijective``.
     bijective : bool
         One-to-one map (equal vertex counts only).
     largest_component : bool
@@ -122,6 +125,7 @@ class Settings:
     extremities: bool = True
     oriented_starts: bool = False
     partial: str | None = None
+    fill_holes: bool = True
     # the output and the input
     bijective: bool = False
     largest_component: bool = False

@@ -83,6 +83,9 @@ def add_parser(sub) -> None:
     g.add_argument("--partial", choices=("source", "target"), default=None,
                    help="in every pair, the SOURCE (or the TARGET) is a part of the other shape "
                         "(as 'meshcorr match --partial'; default: both whole)")
+    g.add_argument("--fill-holes", action=argparse.BooleanOptionalAction, default=True,
+                   help="close each shape's holes before matching, as 'meshcorr match --fill-holes' "
+                        "(default: on)")
     g.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="any other option of meshcorr.match, e.g. --set symmetry=cost (repeatable)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
@@ -157,6 +160,8 @@ def run(args) -> int:
         options["oriented_starts"] = True
     if args.partial is not None:
         options["partial"] = args.partial
+    if not args.fill_holes:
+        options["fill_holes"] = False
     client = None
     if args.scheduler:
         from ..collection import connect

@@ -121,6 +121,10 @@ def add_parser(sub) -> None:
                         "the map covers the part only (with 'target', SOURCE vertices outside the matched "
                         "region get -1) and --json reports the matched region of the whole shape "
                         "(default: both are whole)")
+    g.add_argument("--fill-holes", action=argparse.BooleanOptionalAction, default=True,
+                   help="close each hole of the meshes (a boundary loop) by a fan of triangles before "
+                        "matching; the map covers the input's vertices only. Not with --partial or "
+                        "--bijective, which keep the boundary (default: on)")
     g.add_argument("--anchor-scale", choices=("embedding", "geodesic"), default="embedding",
                    help="scale of the anchor term: the embedding's length scale, or geodesics divided "
                         "by the largest one as in the paper (default: embedding)")
@@ -214,7 +218,8 @@ def run(args) -> int:
                    method=args.method, prealign=args.prealign, mode=args.mode,
                    n_samples=args.n_samples, max_memory=args.max_memory,
                    scalable_above=args.scalable_above, refine_k=args.refine_k, shells=args.shells, landmarks=landmarks,
-                   extremities=args.extremities, oriented_starts=args.oriented_starts, partial=args.partial)
+                   extremities=args.extremities, oriented_starts=args.oriented_starts, partial=args.partial,
+                   fill_holes=args.fill_holes)
     if args.alternative_out and result.alternative_map is None:
         raise ParameterError(f"No alternative map to write to {args.alternative_out}: only the spectral "
                              "method with at least two eigenvector configurations has one.")

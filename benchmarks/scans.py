@@ -14,7 +14,10 @@ is matched as:
 - ``partial-balls``: the source without 3 geodesic balls, 60-90 % of its area
   kept (:func:`meshcorr.cuts.remove_balls`), against the whole target;
 - ``holes``: both meshes with 5-10 holes of 0.5 % of the area each
-  (:func:`meshcorr.cuts.punch_holes`).
+  (:func:`meshcorr.cuts.punch_holes`);
+- ``noise``: both meshes with each vertex moved along its normal by Gaussian
+  noise of 0.5 % of the bounding-box diagonal (about half an edge at 5000
+  vertices), the connectivity kept.
 
 Every case is scored on the **original** target mesh, at the ground-truth
 points that exist on the case's source: the mean geodesic error divided by
@@ -56,8 +59,8 @@ from meshcorr.mesh import Mesh, as_mesh
 from robustness import (DATA, Pair, _spread, appending, markdown, previous_rows, publish, score_points, summarize,
                         tosca_pairs)
 
-CASES = ("clean", "cloud", "cloud-noisy", "partial-plane", "partial-balls", "holes")
-MESH_CASES = ("clean", "partial-plane", "partial-balls", "holes")
+CASES = ("clean", "cloud", "cloud-noisy", "partial-plane", "partial-balls", "holes", "noise")
+MESH_CASES = ("clean", "partial-plane", "partial-balls", "holes", "noise")
 PARTIAL_CASES = ("partial-plane", "partial-balls")
 FIELDS = ["set", "data", "source", "target", "method", "status", "mean_error", "forgiven_error", "flipped",
           "partial", "seconds", "n_points", "kept_area"]
@@ -116,6 +119,16 @@ def noisy_cloud(mesh: Mesh, rng: np.random.Generator) -> tuple[np.ndarray, np.nd
     return cloud, cKDTree(mesh.vertices).query(clean)[1]
 
 
+def noisy_mesh(mesh: Mesh, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """The mesh's vertices moved along their normals by Gaussian noise of 0.5 % of the diagonal; its faces."""
+    import trimesh
+
+    normals = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False).vertex_normals
+    diagonal = np.linalg.norm(np.ptp(mesh.vertices, axis=0))
+    moved = mesh.vertices + normals * rng.normal(scale=0.005 * diagonal, size=(mesh.n_vertices, 1))
+    return moved, np.array(mesh.faces)
+
+
 def make_case(name: str, pair: Pair, source: Mesh, target: Mesh, seed: int) -> Case:
     """The input of case ``name`` for one pair, with a seed of its own."""
     rng = np.random.default_rng(seed)
@@ -145,6 +158,8 @@ def make_case(name: str, pair: Pair, source: Mesh, target: Mesh, seed: int) -> C
                                                      random_state=seed + 1)
         return _restricted(name, pair, holed_source, source_kept, holed_target, target_kept,
                            holed_source.area / source.area)
+    if name == "noise":
+        return Case(name, noisy_mesh(source, rng), noisy_mesh(target, rng), pair.source_points, every, identity)
     raise ValueError(f"unknown case {name!r}")
 
 

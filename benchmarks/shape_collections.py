@@ -14,10 +14,13 @@ ordered pairs:
 (d) ``meshcorr batch --all-pairs --hub auto`` on 2 workers: the n-1 maps onto
     the spectral medoid matched, the others made from them (inverted, then
     composed; :mod:`meshcorr.consistency`): wall seconds per map and the
-    maps' error.
+    maps' error;
+(e) ``meshcorr batch --all-pairs --no-shells`` on 2 workers: every pair
+    matched without the smooth-shell stage (the option that trades accuracy
+    for time): wall seconds per map and the maps' error.
 
-Also: seconds to prepare one shape and to match one prepared pair (medians,
-in this process), the mean geodesic error against TOSCA's ground truth of
+Also: seconds to prepare one shape and to match one prepared pair, with and
+without the smooth shells (medians, in this process), the mean geodesic error against TOSCA's ground truth of
 (b)'s maps, of the maps composed through the hub (:mod:`meshcorr.consistency`)
 and of pyFM's (on ``--gt-points`` sampled truth points per pair), and the
 cycle-consistency error of both sets of maps.
@@ -133,6 +136,10 @@ def main() -> int:
                                           "failed": summary["n_failed"]}
     print(f"batch through the hub {sorted(hub_auto)}, 2 workers: {wall:.1f} s, {wall / len(pairs):.3f} s per map",
           file=sys.stderr)
+    # (e) every pair matched without the smooth shells (the option that trades accuracy for time).
+    wall = _batch_cli(paths, args.out / "noshells", 2, "--no-shells")
+    report["batch_no_shells_2_workers"] = {"wall_s": wall, "per_map_s": wall / len(pairs)}
+    print(f"batch --no-shells, 2 workers: {wall:.1f} s, {wall / len(pairs):.3f} s per map", file=sys.stderr)
     batch_dir = args.out / "batch2" / "maps"
     same_12 = all(np.array_equal(read_map(batch_dir / map_name(a, b)),
                                  read_map(args.out / "batch1" / "maps" / map_name(a, b))) for a, b in pairs)
@@ -152,7 +159,7 @@ def main() -> int:
     print(f"fresh processes: {np.mean(seconds):.2f} s per map, same maps {sum(same)}/{len(same)}", file=sys.stderr)
 
     # Prepare one shape vs match one prepared pair (in this process).
-    prep, pair_s = [], []
+    prep, pair_s, pair_plain_s = [], [], []
     for r in range(args.rounds):
         a, b = paths[r % len(paths)], paths[(r + 1) % len(paths)]
         start = time.perf_counter()
@@ -162,9 +169,14 @@ def main() -> int:
         start = time.perf_counter()
         meshcorr.match(shape_a, shape_b)
         pair_s.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        meshcorr.match(shape_a, shape_b, shells=False)
+        pair_plain_s.append(time.perf_counter() - start)
     report["prepare_one_shape_s"] = float(np.median(prep))
     report["match_prepared_pair_s"] = float(np.median(pair_s))
-    print(f"prepare {np.median(prep):.3f} s, prepared pair {np.median(pair_s):.3f} s", file=sys.stderr)
+    report["match_prepared_pair_no_shells_s"] = float(np.median(pair_plain_s))
+    print(f"prepare {np.median(prep):.3f} s, prepared pair {np.median(pair_s):.3f} s "
+          f"({np.median(pair_plain_s):.3f} s without the shells)", file=sys.stderr)
 
     # (c) pyFM on a sample of pairs.
     pyfm_maps = {}
@@ -204,6 +216,10 @@ def main() -> int:
     report["batch_hub_auto_2_workers"]["mean_error"] = float(np.mean(list(
         _truth_errors(hub_maps, meshes, args.data, args.gt_points, args.seed).values())))
     report["cycle_error_hub_auto"] = float(cycle_errors(hub_maps, meshes, triples).mean())
+    plain_maps = {(Path(a).stem, Path(b).stem): read_map(args.out / "noshells" / "maps" / map_name(a, b))
+                  for a, b in pairs}
+    report["batch_no_shells_2_workers"]["mean_error"] = float(np.mean(list(
+        _truth_errors(plain_maps, meshes, args.data, args.gt_points, args.seed).values())))
     report["cycle_error_direct"] = float(cycle_errors(maps, meshes, triples).mean())
     report["cycle_error_hub"] = float(cycle_errors(consistent, meshes, triples).mean())
     report["n_triples"] = len(triples)

@@ -78,6 +78,23 @@ def test_closed_meshes_clouds_and_touching_loops_are_left_as_they_are(pair):
     assert mesh_boundary(pinched).n_loops == 1 and fill_holes(pinched) is pinched
 
 
+def _flat_ring(inner: np.ndarray) -> Mesh:
+    """A flat ring between the polygon ``inner`` (k, 2) and its copy scaled 3x about (0.5, 0.5)."""
+    k = len(inner)
+    outer = 0.5 + 3.0 * (inner - 0.5)
+    vertices = np.column_stack([np.vstack([inner, outer]), np.zeros(2 * k)])
+    faces = [face for i in range(k) for face in ([i, (i + 1) % k, k + (i + 1) % k], [i, k + (i + 1) % k, k + i])]
+    return as_mesh((vertices, np.array(faces)))
+
+
+def test_a_loop_whose_centre_is_on_its_rim_stays_open():
+    # Each L's vertex mean is its own inner corner: a fan around it would hold triangles without area.
+    ring = _flat_ring(np.array([[0, 0], [2, 0], [2, 1], [1, 1], [1, 2], [0, 2]], dtype=float))
+    assert mesh_boundary(ring).n_loops == 2 and fill_holes(ring) is ring
+    square = _flat_ring(np.array([[0, 0], [1, 0], [1, 1], [0, 1]], dtype=float))  # centres inside: filled
+    assert fill_holes(square).n_caps == 2 and mesh_boundary(fill_holes(square)).n_loops == 0
+
+
 def test_an_image_on_a_cap_goes_to_the_nearest_vertex_of_its_rim(holed):
     target = fill_holes(holed[2])
     n = target.n_input

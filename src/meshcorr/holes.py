@@ -30,7 +30,8 @@ result: a source cap vertex is not reported, and a source vertex sent to a
 target cap vertex is sent to the loop vertex nearest that cap's centre.
 
 Not filled: point clouds (no faces), loops that touch themselves or another
-loop (a vertex with several boundary edges out), the partial mode
+loop (a vertex with several boundary edges out), loops whose centre lies on
+the line of one of their edges (a fan triangle without area), the partial mode
 (:mod:`meshcorr.partial`: the boundary of a part is information, not a
 hole) and one-to-one maps (the vertex counts must stay the input's).
 """
@@ -79,6 +80,12 @@ def fill_holes(mesh: Mesh) -> Mesh:
     simple = np.ones(boundary.n_loops, dtype=bool)
     simple[np.unique(loop[starts[edges[:, 0]] != 1])] = False
     simple &= np.bincount(loop, minlength=boundary.n_loops) >= 3
+    sums = np.zeros((boundary.n_loops, 3))
+    np.add.at(sums, loop, mesh.vertices[edges[:, 0]])
+    centres = sums / np.bincount(loop, minlength=boundary.n_loops)[:, None]
+    # A fan triangle without area (the centre on the line of a rim edge, e.g. a rim vertex itself)
+    # would break the cotangent weights: such a loop stays open.
+    simple[np.unique(loop[_flat(mesh.vertices[edges[:, 0]], mesh.vertices[edges[:, 1]], centres[loop])])] = False
     filled = np.flatnonzero(simple)
     if len(filled) == 0:
         return mesh
@@ -86,15 +93,19 @@ def fill_holes(mesh: Mesh) -> Mesh:
     centre_of[filled] = mesh.n_vertices + np.arange(len(filled))
     chosen = simple[loop]
     corners = edges[chosen]
-    counts = np.bincount(loop[chosen], minlength=boundary.n_loops)[filled]
-    sums = np.zeros((boundary.n_loops, 3))
-    np.add.at(sums, loop[chosen], mesh.vertices[corners[:, 0]])
-    centres = sums[filled] / counts[:, None]
+    centres = centres[filled]
     fans = np.column_stack([corners[:, 1], corners[:, 0], centre_of[loop[chosen]]])
     n_new = len(filled)
     return Mesh(np.vstack([mesh.vertices, centres]), np.vstack([mesh.faces, fans]), name=mesh.name,
                 kept=np.concatenate([mesh.kept, mesh.n_original + np.arange(n_new)]),
                 n_original=mesh.n_original + n_new, n_caps=mesh.n_caps + n_new)
+
+
+def _flat(a: np.ndarray, b: np.ndarray, c: np.ndarray, *, tolerance: float = 1e-6) -> np.ndarray:
+    """``(m,)`` bool: triangles ``(a, b, c)`` whose area is below ``tolerance`` x their squared side lengths."""
+    doubled = np.linalg.norm(np.cross(b - a, c - a), axis=1)
+    scale = ((b - a) ** 2).sum(axis=1) + ((c - a) ** 2).sum(axis=1) + ((c - b) ** 2).sum(axis=1)
+    return doubled <= tolerance * scale
 
 
 def unfilled(mesh: Mesh) -> Mesh:

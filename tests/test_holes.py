@@ -123,6 +123,8 @@ def test_holes_closed_map_as_well_as_the_whole_shapes(pair, holed):
         assert result.map.shape == (holed_source.n_vertices,)
         assert 0 <= result.map.min() and result.map.max() < holed_target.n_vertices
         assert result.source.n_vertices == holed_source.n_vertices and result.params["fill_holes"] is fill
+        loops = {"source": mesh_boundary(holed_source).n_loops, "target": mesh_boundary(holed_target).n_loops}
+        assert result.params.get("holes_closed") == (loops if fill else None)
         assert len(result.source_embedding) == holed_source.n_vertices
         errors[fill] = geodesic_errors(target, target_kept[result.map], truth[source_kept]).mean()
     # Measured: 0.0125 closed, 0.032 open, 0.0127 for the whole shapes.
@@ -168,4 +170,6 @@ def test_cli_fills_holes_by_default_and_takes_no_fill_holes(holed, tmp_path, cap
         maps[flag] = np.loadtxt(out, dtype=int)
         assert maps[flag].shape == (holed[0].n_vertices,) and maps[flag].max() < holed[2].n_vertices
     assert (maps["--fill-holes"] != maps["--no-fill-holes"]).any()
-    assert "Traceback" not in capsys.readouterr().err
+    err = capsys.readouterr().err
+    loops = [mesh_boundary(holed[i]).n_loops for i in (0, 2)]  # 6 holes, two of the target's merged: 6 and 5
+    assert "Traceback" not in err and err.count(f"closed {loops[0]} hole(s) of SOURCE and {loops[1]} of TARGET") == 1

@@ -188,7 +188,8 @@ def restrict(result, source: Mesh, target: Mesh):
         ``map``, ``alternative_map`` and ``cost`` over the input's source
         vertices (:func:`restrict_map`); the vertex lists, embeddings and
         anchors without cap vertices; ``source`` and ``target`` the meshes
-        as given (:func:`unfilled`). Candidate summaries and timings stay.
+        as given (:func:`unfilled`); ``params["holes_closed"]`` the number of
+        holes closed on each side. Candidate summaries and timings stay.
     """
     if source.n_caps == 0 and target.n_caps == 0:
         return result
@@ -206,7 +207,8 @@ def restrict(result, source: Mesh, target: Mesh):
         source_embedding=_rows(result.source_embedding, source_rows),
         target_embedding=_rows(result.target_embedding, target_rows),
         aligned_target_embedding=_rows(result.aligned_target_embedding, target_rows),
-        anchors=anchors, source=unfilled(source), target=unfilled(target))
+        anchors=anchors, source=unfilled(source), target=unfilled(target),
+        params=dict(result.params, holes_closed={"source": source.n_caps, "target": target.n_caps}))
 
 
 def _rows(array: np.ndarray | None, keep: np.ndarray) -> np.ndarray | None:

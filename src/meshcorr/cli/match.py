@@ -246,6 +246,10 @@ def run(args) -> int:
         if where:
             print(f"meshcorr: wrote {where}: {summary['n_mapped']} source vertices mapped; they land on "
                   f"{summary['n_target_hit']} distinct target vertices ({total:.1f} s)", file=sys.stderr)
+        closed = result.params.get("holes_closed")
+        if closed:
+            print(f"meshcorr: closed {closed['source']} hole(s) of SOURCE and {closed['target']} of TARGET "
+                  "before matching (--no-fill-holes keeps them open)", file=sys.stderr)
         if summary["partial"] is not None:
             report = summary["partial"]
             print(f"meshcorr: the {report['part']} is a part of the {report['whole']}: the matched region is "

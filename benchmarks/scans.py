@@ -17,7 +17,10 @@ is matched as:
   (:func:`meshcorr.cuts.punch_holes`);
 - ``noise``: both meshes with each vertex moved along its normal by Gaussian
   noise of 0.5 % of the bounding-box diagonal (about half an edge at 5000
-  vertices), the connectivity kept.
+  vertices), the connectivity kept;
+- ``denser-target``: the target subdivided once (each triangle split in four
+  at its edge midpoints, about 4x the vertices; the surface unchanged), the
+  source as it is: another resolution, and the scalable mode on one side.
 
 Every case is scored on the **original** target mesh, at the ground-truth
 points that exist on the case's source: the mean geodesic error divided by
@@ -59,8 +62,8 @@ from meshcorr.mesh import Mesh, as_mesh
 from robustness import (DATA, Pair, _spread, appending, markdown, previous_rows, publish, score_points, summarize,
                         tosca_pairs)
 
-CASES = ("clean", "cloud", "cloud-noisy", "partial-plane", "partial-balls", "holes", "noise")
-MESH_CASES = ("clean", "partial-plane", "partial-balls", "holes", "noise")
+CASES = ("clean", "cloud", "cloud-noisy", "partial-plane", "partial-balls", "holes", "noise", "denser-target")
+MESH_CASES = ("clean", "partial-plane", "partial-balls", "holes", "noise", "denser-target")
 PARTIAL_CASES = ("partial-plane", "partial-balls")
 FIELDS = ["set", "data", "source", "target", "method", "status", "mean_error", "forgiven_error", "flipped",
           "partial", "seconds", "n_points", "kept_area"]
@@ -160,6 +163,12 @@ def make_case(name: str, pair: Pair, source: Mesh, target: Mesh, seed: int) -> C
                            holed_source.area / source.area)
     if name == "noise":
         return Case(name, noisy_mesh(source, rng), noisy_mesh(target, rng), pair.source_points, every, identity)
+    if name == "denser-target":
+        import trimesh
+
+        vertices, faces = trimesh.remesh.subdivide(target.vertices, target.faces)  # originals first
+        nearest = cKDTree(target.vertices).query(vertices)[1]  # a midpoint stands for its nearest vertex
+        return Case(name, source, (vertices, faces), pair.source_points, every, nearest)
     raise ValueError(f"unknown case {name!r}")
 
 

@@ -467,7 +467,7 @@ def _compose_task(source, target, to_hub: dict | None, from_hub: dict | None, so
 def _invert_task(hub, target, onto_hub: dict | None, hub_path: str, target_path: str, map_path: str,
                  settings: dict, ground_truth: str | None) -> dict:
     """Worker: the hub's map onto a shape, the inverse of that shape's map onto the hub, written; its record."""
-    from .consistency import invert
+    from .consistency import input_positions, invert
     from .io import read_map
 
     record = _record(hub_path, target_path, map_path, hub_path)
@@ -477,11 +477,8 @@ def _invert_task(hub, target, onto_hub: dict | None, hub_path: str, target_path:
                            f"which {reason}")[:300]
         return record
 
-    def inverse() -> np.ndarray:
-        mesh = unfilled(hub.mesh)  # without the caps of its holes (meshcorr.holes)
-        points = np.full((mesh.n_original, 3), np.nan)  # the input numbering, which the maps use
-        points[mesh.kept] = mesh.vertices
-        return invert(read_map(onto_hub["map"]), points)
+    def inverse() -> np.ndarray:  # on the hub's own vertices, without the caps of its holes (meshcorr.holes)
+        return invert(read_map(onto_hub["map"]), input_positions(unfilled(hub.mesh)))
 
     return _made_map(record, hub, target, inverse, settings, ground_truth)
 

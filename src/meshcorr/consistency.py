@@ -105,6 +105,14 @@ def invert(mapping: np.ndarray, target_points: np.ndarray) -> np.ndarray:
     return out
 
 
+def input_positions(mesh: Mesh) -> np.ndarray:
+    """``(mesh.n_original, 3)`` float: each input vertex's position, in the numbering maps use; NaN for a
+    vertex the mesh dropped (``largest_component``): the ``target_points`` of :func:`invert`."""
+    points = np.full((mesh.n_original, 3), np.nan)
+    points[mesh.kept] = mesh.vertices
+    return points
+
+
 def sample_triples(names: Sequence[str], maps: Maps, n_triples: int, random_state: int | None = 0
                    ) -> list[tuple[str, str, str]]:
     """Up to ``n_triples`` distinct ordered triples (A, B, C) whose three maps exist, seeded."""

@@ -217,9 +217,8 @@ class PreparedShape:
         header, arrays = _read(path)
         prepared = cls._from_arrays(header, arrays)
         if mesh is not None:
-            other = as_mesh(mesh, largest_component=prepared.settings["largest_component"])
-            if prepared.settings["fill_holes"]:
-                other = fill_holes(other)
+            other = _closed(as_mesh(mesh, largest_component=prepared.settings["largest_component"]),
+                            prepared.settings)
             if mesh_digest(other) != header["mesh_sha256"]:
                 raise PreparedShapeError(f"{path} was prepared for another mesh than {other.name}: prepare "
                                          "this mesh again (meshcorr.prepare) instead of loading that file.")
@@ -312,6 +311,11 @@ def load_mesh(shape: MeshLike, settings: dict, *, name: str | None) -> Mesh:
     k = settings["k"]
     mesh = as_mesh(shape, name=name, largest_component=settings["largest_component"], min_vertices=k + 2,
                    reason=f"The spectral embedding with k={k} needs at least {k + 2} vertices.")
+    return _closed(mesh, settings)
+
+
+def _closed(mesh: Mesh, settings: dict) -> Mesh:
+    """``mesh`` with its holes closed (:func:`meshcorr.holes.fill_holes`) when ``settings["fill_holes"]``."""
     return fill_holes(mesh) if settings["fill_holes"] else mesh
 
 

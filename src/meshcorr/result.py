@@ -347,18 +347,12 @@ class Correspondence:
         inverse : Correspondence
             ``method`` is ``"inverse of ..."``; meshes swapped.
         """
-        from scipy.spatial import cKDTree
+        from .consistency import input_positions, invert
 
         src, tgt = self._meshes("inverse")
-        mapped = np.flatnonzero(self.map >= 0)
-        if mapped.size == 0:
+        if not (self.map >= 0).any():
             raise ParameterError("The map sends no source vertex anywhere; it has no inverse.")
-        images = self.map[mapped]
-        positions = np.zeros((tgt.n_original, 3))
-        positions[tgt.kept] = tgt.vertices
-        _, nearest = cKDTree(positions[images]).query(positions[tgt.kept])
-        full = np.full(tgt.n_original, -1, dtype=np.int64)
-        full[tgt.kept] = mapped[nearest]
+        full = invert(self.map, input_positions(tgt))
         return Correspondence(map=full, method=f"inverse of {self.method}", source_vertices=tgt.kept.copy(),
                               target_vertices=src.kept.copy(), params=dict(self.params), source=tgt, target=src)
 

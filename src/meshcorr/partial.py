@@ -45,7 +45,13 @@ that:
    restricted to the matched region (the part's "indicator function" of
    Rodolà et al., here estimated from the map instead of optimised). Vertices
    near the cut are weighted down in every fit.
-6. **The matched region** (:func:`matched_region`): the whole's vertices
+6. **Smooth shells** (:func:`meshcorr.shells.shell_refine` with
+   ``part_fraction``): the part's shells aligned with the whole's, from 16
+   functions on the part (and :math:`\\lceil k / r \\rceil` on the whole) to
+   the coordinates themselves, the whole's vertices restricted to the
+   region matched by the zoomed-out map and the cut weighted down as above
+   (meshes only).
+7. **The matched region** (:func:`matched_region`): the whole's vertices
    reached by the map, joined by a morphological closing along the surface,
    reported as a vertex mask and its area fraction.
 
@@ -75,6 +81,7 @@ from .mesh import Mesh
 from .orientation import mesh_orientation, vertex_normals
 from .refine import _nearest_rows, laplace_basis
 from .selection import LANDMARK_RADIUS, MapCandidate, choose_map, score_orientation
+from .shells import shell_refine
 from .timing import StageTimer
 
 RowFn = Callable[[int], np.ndarray]
@@ -627,8 +634,9 @@ def _orientation_reliable(*meshes: Mesh) -> bool:
 
 def match_part(part: Mesh, whole: Mesh, part_rows: RowFn, whole_rows: RowFn, *, landmarks: np.ndarray | None = None,
                extremities: bool = True, initial_maps: Sequence[tuple[str, np.ndarray]] = (), refine: bool = True,
-               refine_k: int = 40, random_state: int | None = 0, timer: StageTimer | None = None) -> PartialMap:
-    """Map a part of a shape into the whole shape (module docstring, steps 1-6).
+               refine_k: int = 40, shells: bool = True, random_state: int | None = 0,
+               timer: StageTimer | None = None) -> PartialMap:
+    """Map a part of a shape into the whole shape (module docstring, steps 1-7).
 
     Parameters
     ----------
@@ -647,9 +655,13 @@ def match_part(part: Mesh, whole: Mesh, part_rows: RowFn, whole_rows: RowFn, *, 
         Finish with :func:`partial_zoomout`.
     refine_k : int
         Its basis size on the part.
+    shells : bool
+        Then align the part's smooth shells with the whole's
+        (:func:`meshcorr.shells.shell_refine` with ``part_fraction``; meshes
+        only, stage "shells").
     random_state : int or None
     timer : StageTimer, optional
-        Receives the stages "extremities", "candidates", "refine" and "region".
+        Receives the stages "extremities", "candidates", "refine", "shells" and "region".
 
     Returns
     -------
@@ -702,6 +714,12 @@ def match_part(part: Mesh, whole: Mesh, part_rows: RowFn, whole_rows: RowFn, *, 
                                                weights=weights, random_state=random_state)
             if landmarks is not None:
                 mapping[landmarks[:, 0]] = landmarks[:, 1]
+        if shells and not (part.is_cloud or whole.is_cloud):
+            with timer.stage("shells"):  # in the region of the zoomed-out map, with the same weights
+                region = part_region(part, whole, mapping, scale)
+                ratio = float(np.clip(_area_fraction(whole, region), 0.2, 1.0))
+                mapping = shell_refine(part, whole, mapping, k=k, landmarks=landmarks, part_fraction=ratio,
+                                       region=region, weights=weights, random_state=random_state)
     with timer.stage("region"):
         _, scale = fitted_distortion(part_rows, whole_rows, mapping, _sources(interior, random_state), interior)
         region = part_region(part, whole, mapping, scale)

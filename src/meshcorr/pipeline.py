@@ -158,8 +158,9 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         after Smooth Shells), on a schedule of small steps
         (:data:`meshcorr.shells.SCALES`). With ``landmarks`` their geodesic
         distances join that space. Meshes only, with ``refine`` and without
-        ``bijective`` (point clouds, partial shapes and one-to-one maps keep
-        the ZoomOut map).
+        ``bijective`` (point clouds and one-to-one maps keep the ZoomOut
+        map); a declared part is aligned with the whole's shells from 16
+        functions on (:mod:`meshcorr.partial`, step 6).
     anchor_scale : {"embedding", "geodesic"}
         "embedding": the anchor term is expressed in the embedding's length
         scale (its geodesics times mean embedding distance / (h x mean
@@ -253,7 +254,7 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
                                 n_anchors=n_anchors, anchor_weight=anchor_weight, anchor_scale=anchor_scale,
                                 largest_component=largest_component, mode=mode, n_samples=n_samples,
                                 max_memory=max_memory, scalable_above=scalable_above, refine=refine,
-                                refine_k=refine_k, random_state=random_state, fill_holes=False)
+                                refine_k=refine_k, shells=shells, random_state=random_state, fill_holes=False)
         return _match_partial(shapes, pairs, partial, spectral_options, extremities=extremities, timer=timer)
 
     mode = select_mode(mode, src.n_vertices, tgt.n_vertices, max_memory=max_memory,
@@ -401,7 +402,8 @@ def _match_partial(shapes, pairs: np.ndarray | None, partial: str, spectral_opti
         to_local[whole.kept] = np.arange(whole.n_vertices)
         initial.append(("spectral-alternative", to_local[spectral.alternative_map[part.kept]]))
     found = match_part(part, whole, part_rows, whole_rows, landmarks=pairs, extremities=extremities,
-                       initial_maps=initial, refine=refine, refine_k=refine_k, random_state=random_state, timer=timer)
+                       initial_maps=initial, refine=refine, refine_k=refine_k, shells=spectral_options["shells"],
+                       random_state=random_state, timer=timer)
     check_part_not_larger(part, whole, found.scale, role=partial)
     local_map, other_map = found.mapping, found.alternative
     if partial == "target":

@@ -51,6 +51,15 @@ start): the start is the map the pipeline chose, and this stage only
 refines it. The normals keep facing surfaces apart (an arm against the
 body); the spectral term keeps the map on the part ZoomOut put it on.
 
+A source that is a *part* of the target (``part_fraction`` r, the partial
+mode of :mod:`meshcorr.partial`) keeps the target's units, takes
+:math:`\\lceil k / r \\rceil` functions on the target for :math:`k` on the part
+(the slanted-diagonal spectrum of a part: Rodolà et al., "Partial functional
+correspondence", CGF 2017), compares the spectral coordinates through the
+projection of :func:`meshcorr.partial.partial_zoomout`, and starts at
+:data:`PART_FIRST_SCALE` functions, the coarser shells of a part not
+resembling the whole's.
+
 Measured (``benchmarks/RESULTS-robustness.md``): on the development pairs of
 every set the error from the same start drops by 20-30 % (TOSCA 5k
 0.029 -> 0.021, gorilla -> human 0.12 -> 0.10, SHREC'07 humans 0.077 ->
@@ -64,11 +73,12 @@ from __future__ import annotations
 import numpy as np
 
 from ._params import check_float, check_int
+from ._threads import parallel_map
 from .errors import ParameterError
 from .laplacian import vertex_areas
 from .mesh import Mesh
 from .orientation import mesh_orientation, orientation_score, vertex_normals
-from .refine import _basis_size, check_vertex_map, nearest_vertices, orthogonal_fit, pair_bases
+from .refine import _basis_size, check_vertex_map, laplace_basis, nearest_vertices, orthogonal_fit, pair_bases
 
 #: Weight of the shells' unit normals against coordinates of a unit-area shape.
 NORMAL_WEIGHT = 0.3
@@ -83,13 +93,20 @@ DESCRIPTOR_WEIGHT = 0.3
 SCALES = tuple(range(6, 41, 2))
 #: Source vertices sampled for the coarse steps (all of them below this).
 N_SAMPLE = 1000
+#: A part's first step (``part_fraction``): the coarser shells of a part and of the whole do not
+#: correspond (measured on the partial cases of ``benchmarks/scans.py``: from 6 functions the maps
+#: got worse, from 16 better; ``benchmarks/RESULTS-scans.md``).
+PART_FIRST_SCALE = 16
+#: The least area fraction used to size the whole's bases (at most ``k / PART_MIN_FRACTION`` functions).
+PART_MIN_FRACTION = 0.5
 
 
 def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40,
                  scales: tuple[int, ...] = SCALES, n_sample: int = N_SAMPLE,
                  landmarks: np.ndarray | None = None, orientation: float | None = None,
                  descriptors: tuple[np.ndarray, np.ndarray] | None = None,
-                 random_state: int | None = 0) -> np.ndarray:
+                 part_fraction: float | None = None, region: np.ndarray | None = None,
+                 weights: np.ndarray | None = None, random_state: int | None = 0) -> np.ndarray:
     """Refine a vertex map by aligning the shapes' smooth shells (module docstring).
 
     Parameters
@@ -117,6 +134,22 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
         pipeline's: geodesic distances to the user's landmarks divided by
         their mean, :func:`meshcorr.landmark_map.landmark_descriptors`),
         appended to the product space with weight :data:`DESCRIPTOR_WEIGHT`.
+    part_fraction : float, optional
+        The source is a part of the target covering this fraction r of its
+        area (:mod:`meshcorr.partial`). The part keeps the target's units
+        (its coordinates over :math:`\\sqrt{\\operatorname{area}/r}`); a
+        step of :math:`k` functions on the part takes :math:`\\lceil k / r
+        \\rceil` on the target (the slanted-diagonal spectrum of a part,
+        r floored at :data:`PART_MIN_FRACTION`); the spectral coordinates
+        are compared as in :func:`meshcorr.partial.partial_zoomout`, the
+        target's functions projected on the part's (the part's scaled by
+        :math:`\\sqrt r`); the steps start at :data:`PART_FIRST_SCALE`.
+    region : (n2,) bool, optional
+        Target vertices the map may reach (the matched region of a part).
+    weights : (n1,) float, optional
+        Weight of each source vertex in the rigid motion, the deformation
+        and the spectral fit, times its area (e.g. a part's vertices near
+        its cut weighted down).
     random_state : int or None
         Seed of the bases' start vectors and of the sample.
 
@@ -134,12 +167,23 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
     if descriptors is not None:
         descriptors = _checked_descriptors(descriptors, n1, target.n_vertices)
     k = _basis_size(k, source, target)
+    part = part_fraction is not None
+    if part:
+        part_fraction = check_float("part_fraction", part_fraction, minimum=1e-3, maximum=1.0)
+        scales = tuple(s for s in scales if s >= PART_FIRST_SCALE)
+        basis_fraction = max(part_fraction, PART_MIN_FRACTION)
+        k2 = lambda size: min(int(np.ceil(size / basis_fraction)), target.n_vertices - 1)  # noqa: E731
+        phi1, phi2 = parallel_map(lambda item: laplace_basis(*item, random_state=random_state)[1],
+                                  ((source, k), (target, k2(k))))
+    else:
+        k2 = lambda size: size  # noqa: E731
+        phi1, phi2 = pair_bases(source, target, k, random_state=random_state)
     scales = tuple(s for s in scales if s < k)
-    phi1, phi2 = pair_bases(source, target, k, random_state=random_state)
-    (x1, m1), (x2, m2) = _unit_shape(source), _unit_shape(target)
+    (x1, m1), (x2, m2) = _unit_shape(source, 1.0 if part_fraction is None else part_fraction), _unit_shape(target)
     rng = np.random.default_rng(random_state)
     sample = np.arange(n1) if n1 <= n_sample else np.sort(rng.choice(n1, size=n_sample, replace=False))
-    weights = m1[sample] / m1[sample].sum()  # the sample's share of the mass-weighted projection
+    mass = m1[sample] if weights is None else m1[sample] * _checked_weights(weights, n1)[sample]
+    weights = mass / mass.sum()  # the sample's share of the mass-weighted projection
     # Whether the given map keeps the orientation or mirrors it (decided once, on the whole map:
     # at the coarse scales a thin shape's shell fits its reflection nearly as well).
     if orientation is None:
@@ -147,15 +191,38 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
     orientation = check_float("orientation", orientation, minimum=0.0, maximum=1.0)
     side = 1.0 if orientation >= 0.5 else -1.0
     # The shells' normals from the outward-facing triangles (a file may come inside out).
-    step = _Step(mesh_orientation(source).faces, sample, weights, landmarks, side, descriptors)
+    pool = None if region is None else np.flatnonzero(_checked_region(region, target.n_vertices))
+    step = _Step(mesh_orientation(source).faces, sample, weights, landmarks, side, descriptors,
+                 part_fraction=part_fraction, pool=pool)
     faces2 = mesh_orientation(target).faces
     for size in scales:
         p1 = phi1[:, :size]
-        points = _shell_points(phi2, m2, x2, faces2, size)
-        mapping[sample] = step(p1, phi2[:, :size], _low_pass(p1, m1, x1), points, mapping, sample)
-    points = _shell_points(phi2, m2, x2, faces2, k, low_pass=False)
+        points = _shell_points(phi2, m2, x2, faces2, k2(size), spectral=not part)
+        mapping[sample] = step(p1, phi2[:, :k2(size)], _low_pass(p1, m1, x1), points, mapping, sample)
+    points = _shell_points(phi2, m2, x2, faces2, k2(k), low_pass=False, spectral=not part)
     mapping = step(phi1, phi2, x1, points, mapping, np.arange(n1))
     return step.pin(mapping)
+
+
+def _checked_weights(weights, n1: int) -> np.ndarray:
+    """Per-source-vertex weights as float64, checked: one finite, non-negative value per vertex, some positive."""
+    try:
+        weights = np.asarray(weights, dtype=np.float64)
+    except (TypeError, ValueError):
+        weights = np.empty(0)
+    if weights.shape != (n1,) or not np.isfinite(weights).all() or (weights < 0).any() or not weights.any():
+        raise ParameterError(f"weights must be {n1} finite, non-negative numbers (one per source vertex), "
+                             "not all zero.")
+    return weights
+
+
+def _checked_region(region, n2: int) -> np.ndarray:
+    """The target vertices a map may reach, as a boolean mask, checked: one entry per vertex, some True."""
+    region = np.asarray(region)
+    if region.shape != (n2,) or region.dtype != bool or not region.any():
+        raise ParameterError(f"region must be a boolean mask of the target's {n2} vertices with at least "
+                             "one True entry.")
+    return region
 
 
 def _checked_descriptors(descriptors, n1: int, n2: int) -> tuple[np.ndarray, np.ndarray]:
@@ -173,19 +240,22 @@ def _checked_descriptors(descriptors, n1: int, n2: int) -> tuple[np.ndarray, np.
 
 
 def _shell_points(basis: np.ndarray, mass: np.ndarray, coords: np.ndarray, faces: np.ndarray, size: int, *,
-                  low_pass: bool = True) -> np.ndarray:
-    """The target's side of the product space at one scale: ``[X2, w_n n(X2), w_s Phi2]``."""
+                  low_pass: bool = True, spectral: bool = True) -> np.ndarray:
+    """The target's side of the product space at one scale: ``[X2, w_n n(X2), w_s Phi2]`` (without Phi2 for a part)."""
     phi = basis[:, :size]
     shell = _low_pass(phi, mass, coords) if low_pass else coords
-    return np.hstack([shell, NORMAL_WEIGHT * _normals(shell, faces), SPECTRAL_WEIGHT * phi])
+    columns = [shell, NORMAL_WEIGHT * _normals(shell, faces)]
+    return np.hstack(columns + [SPECTRAL_WEIGHT * phi] if spectral else columns)
 
 
 class _Step:
     """One coarse-to-fine step: deform the source shell, fit C, map ``rows`` in the product space."""
 
     def __init__(self, faces1: np.ndarray, sample: np.ndarray, weights: np.ndarray,
-                 landmarks: np.ndarray | None, side: float, descriptors=None) -> None:
+                 landmarks: np.ndarray | None, side: float, descriptors=None, *,
+                 part_fraction: float | None = None, pool: np.ndarray | None = None) -> None:
         self.faces1, self.sample, self.weights, self.side = faces1, sample, weights, side
+        self.part_fraction, self.pool = part_fraction, pool
         self.landmarks = None if landmarks is None or len(landmarks) == 0 else np.asarray(landmarks)
         self.descriptors = None if descriptors is None else tuple(DESCRIPTOR_WEIGHT * d for d in descriptors)
 
@@ -205,12 +275,20 @@ class _Step:
         side = self.side
         moved = _rigid(shell1[s], shell2[images], self.weights, side)(shell1)
         deformed = moved + p1 @ (p1[s].T @ (self.weights[:, None] * (shell2[images] - moved[s])))
-        C = orthogonal_fit(p1[s], p2[images])  # Phi1 C ~ Phi2[T]
-        queries = [deformed[rows], side * NORMAL_WEIGHT * _normals(deformed, self.faces1)[rows],
-                   SPECTRAL_WEIGHT * p1[rows] @ C]
+        queries = [deformed[rows], side * NORMAL_WEIGHT * _normals(deformed, self.faces1)[rows]]
+        if self.part_fraction is None:
+            C = orthogonal_fit(p1[s], p2[images])  # Phi1 C ~ Phi2[T]
+            queries.append(SPECTRAL_WEIGHT * p1[rows] @ C)
+        else:  # a part: the whole's functions projected on the part's (meshcorr.partial.partial_zoomout)
+            U, _, Vt = np.linalg.svd((self.weights[:, None] * p1[s]).T @ (self.weights[:, None] * p2[images]),
+                                     full_matrices=False)
+            queries.append(SPECTRAL_WEIGHT * np.sqrt(self.part_fraction) * p1[rows])
+            points = np.hstack([points, SPECTRAL_WEIGHT * p2 @ (U @ Vt).T])
         if self.descriptors is not None:  # the landmarks' distances (pipeline: the user's landmarks)
             queries.append(self.descriptors[0][rows])
             points = np.hstack([points, self.descriptors[1]])
+        if self.pool is not None:
+            return self.pool[nearest_vertices(np.hstack(queries), points[self.pool])]
         return nearest_vertices(np.hstack(queries), points)
 
 
@@ -227,11 +305,12 @@ def _rigid(points: np.ndarray, onto: np.ndarray, weights: np.ndarray, side: floa
     return lambda x: (x - mean_p) @ rotation + mean_q
 
 
-def _unit_shape(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
-    """Coordinates scaled to unit area and centred on the centroid, and the unit-sum vertex masses."""
+def _unit_shape(mesh: Mesh, fraction: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """Coordinates scaled to unit area (of the whole, for a part covering ``fraction`` of it) and centred
+    on the centroid, and the unit-sum vertex masses."""
     areas = np.asarray(vertex_areas(mesh), dtype=np.float64)
     mass = areas / areas.sum()
-    coords = np.asarray(mesh.vertices, dtype=np.float64) / np.sqrt(areas.sum())
+    coords = np.asarray(mesh.vertices, dtype=np.float64) / np.sqrt(areas.sum() / fraction)
     return coords - mass @ coords, mass
 
 

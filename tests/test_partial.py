@@ -73,10 +73,13 @@ def test_a_plane_cut_maps_into_the_right_region_of_the_whole(pair, plane_part):
     assert result.orientation_reliable is True
 
 
-def test_the_part_is_aligned_by_its_smooth_shells_unless_turned_off(pair, plane_part):
+def test_the_part_starts_from_the_default_map_and_is_aligned_by_its_shells(pair, plane_part):
     source, target, truth, back = pair
     part, kept, result = plane_part
     assert "shells" in result.timings and result.params["shells"] is True
+    # One start is the part matched as a whole shape (its cut closed), as the default mode would.
+    assert "whole-to-whole" in result.timings
+    assert "whole-to-whole" in {candidate["origin"] for candidate in result.map_candidates}
     plain = meshcorr.match(part, target, partial="source", shells=False)
     assert "shells" not in plain.timings and plain.params["shells"] is False
     assert _error(target, plain.map, truth[kept]) < ERROR_TOLERANCE

@@ -649,8 +649,8 @@ def match_part(part: Mesh, whole: Mesh, part_rows: RowFn, whole_rows: RowFn, *, 
     extremities : bool
         Start candidate maps from matched tips.
     initial_maps : sequence of (str, (n_part,) int)
-        Further starts, named (e.g. the Jain-Zhang map of the part, which
-        holds when the cut leaves the shape's global structure).
+        Further starts, named (e.g. the map of the part matched as a whole
+        shape, which holds when the cut leaves the shape's global structure).
     refine : bool
         Finish with :func:`partial_zoomout`.
     refine_k : int

@@ -171,12 +171,16 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
     if part:
         part_fraction = check_float("part_fraction", part_fraction, minimum=1e-3, maximum=1.0)
         scales = tuple(s for s in scales if s >= PART_FIRST_SCALE)
-        basis_fraction = max(part_fraction, PART_MIN_FRACTION)
-        k2 = lambda size: min(int(np.ceil(size / basis_fraction)), target.n_vertices - 1)  # noqa: E731
+    basis_fraction = max(part_fraction, PART_MIN_FRACTION) if part else 1.0
+
+    def k2(size: int) -> int:
+        """The target's basis size for ``size`` functions on the source (the same for whole shapes)."""
+        return min(int(np.ceil(size / basis_fraction)), target.n_vertices - 1) if part else size
+
+    if part:
         phi1, phi2 = parallel_map(lambda item: laplace_basis(*item, random_state=random_state)[1],
                                   ((source, k), (target, k2(k))))
     else:
-        k2 = lambda size: size  # noqa: E731
         phi1, phi2 = pair_bases(source, target, k, random_state=random_state)
     scales = tuple(s for s in scales if s < k)
     (x1, m1), (x2, m2) = _unit_shape(source, 1.0 if part_fraction is None else part_fraction), _unit_shape(target)

@@ -702,8 +702,7 @@ def match_part(part: Mesh, whole: Mesh, part_rows: RowFn, whole_rows: RowFn, *, 
     history: list[dict] = []
     if refine:
         with timer.stage("refine"):
-            region = part_region(part, whole, mapping, scale)
-            ratio = float(np.clip(_area_fraction(whole, region), 0.2, 1.0))
+            region, ratio = _matched_share(part, whole, mapping, scale)
             k = min(refine_k, part.n_vertices - 1)
             k_whole = min(int(ceil(k / ratio)), whole.n_vertices - 1)
             part_basis, whole_basis = parallel_map(
@@ -716,8 +715,7 @@ def match_part(part: Mesh, whole: Mesh, part_rows: RowFn, whole_rows: RowFn, *, 
                 mapping[landmarks[:, 0]] = landmarks[:, 1]
         if shells and not (part.is_cloud or whole.is_cloud):
             with timer.stage("shells"):  # in the region of the zoomed-out map, with the same weights
-                region = part_region(part, whole, mapping, scale)
-                ratio = float(np.clip(_area_fraction(whole, region), 0.2, 1.0))
+                region, ratio = _matched_share(part, whole, mapping, scale)
                 mapping = shell_refine(part, whole, mapping, k=k, landmarks=landmarks, part_fraction=ratio,
                                        region=region, weights=weights, random_state=random_state)
     with timer.stage("region"):
@@ -791,6 +789,13 @@ def invert_part_map(whole: Mesh, mapping: np.ndarray, region: np.ndarray) -> np.
 def _reach(part: Mesh, whole: Mesh, scale: float) -> float:
     """How far around an image the whole counts as reached: 1.5 x the coarser of the two vertex spacings."""
     return 1.5 * max(mean_edge_length(whole), scale * mean_edge_length(part))
+
+
+def _matched_share(part: Mesh, whole: Mesh, mapping: np.ndarray, scale: float) -> tuple[np.ndarray, float]:
+    """The region of the whole a map reaches (:func:`part_region`) and its area fraction r, clipped to
+    [0.2, 1]: the region and r of the refinements (:func:`partial_zoomout`, the part's smooth shells)."""
+    region = part_region(part, whole, mapping, scale)
+    return region, float(np.clip(_area_fraction(whole, region), 0.2, 1.0))
 
 
 def _area_fraction(mesh: Mesh, mask: np.ndarray) -> float:

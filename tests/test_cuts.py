@@ -39,6 +39,15 @@ def test_ball_removal_keeps_one_connected_piece_of_about_the_asked_area(ball):
     assert len(np.unique(kept)) == len(kept)
 
 
+@pytest.mark.parametrize("seed", [0, 2, 6])
+def test_balls_that_sever_a_piece_still_leave_the_asked_area(seed):
+    # On the creature these balls cut off a limb or the tail: keeping the faces of the asked area and
+    # then the largest piece left 0.59-0.61 of it; the radius now shrinks until the piece holds 0.7.
+    creature = as_mesh(datasets.creature(resolution=1), name="creature")
+    part, _ = cuts.remove_balls(creature, keep=0.7, n_balls=3, random_state=seed)
+    assert part.area / creature.area == pytest.approx(0.7, abs=0.01)
+
+
 def test_holes_are_the_asked_number_of_boundary_loops(ball):
     holed, kept = cuts.punch_holes(ball, n_holes=6, hole_area=0.01, random_state=3)
     assert _boundary_loops(holed) == 6

@@ -87,8 +87,8 @@ def test_the_part_starts_from_the_default_map_and_is_aligned_by_its_shells(pair,
 
 def test_removed_geodesic_balls(pair):
     source, target, truth, back = pair
-    part, kept = cuts.remove_balls(source, keep=0.9, n_balls=3, random_state=0)
-    assert 0.6 < part.area / source.area < 0.9
+    part, kept = cuts.remove_balls(source, keep=0.8, n_balls=3, random_state=0)
+    assert 0.7 < part.area / source.area < 0.85  # 0.76: a severed piece rejoins only at 0.91
     result = meshcorr.match(part, target, partial="source")
     assert _error(target, result.map, truth[kept]) < ERROR_TOLERANCE
     inside = np.zeros(source.n_vertices, dtype=bool)

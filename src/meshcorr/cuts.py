@@ -17,7 +17,10 @@ Faces are kept or removed by the mean of their vertices' values (height
 along the plane's normal, distance to the nearest centre), the vertices
 of no kept face are dropped, and the largest connected piece is kept (a
 cut can leave islands; the faces around a vertex where two sheets would
-touch are dropped too), so the result is a valid input to
+touch are dropped too). The threshold on the values is the one at which
+that piece holds the asked fraction of the area, so a cut that severs a
+limb or the head takes that much more elsewhere. The result is a valid
+input to
 :func:`meshcorr.match`. Geodesic distances come from the heat method
 (:mod:`meshcorr.geodesics`, potpourri3d).
 """
@@ -41,19 +44,63 @@ def _face_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
 
 
 def _faces_below(mesh: Mesh, values: np.ndarray, keep: float) -> np.ndarray:
-    """``(m,)`` bool: the faces of least mean vertex value that hold ``keep`` of the area."""
+    """``(m,)`` bool: the faces of least mean vertex value whose largest connected piece holds ``keep`` of the area.
+
+    The faces are taken in the order of their values, as few as give a
+    largest piece (:func:`submesh`'s) of at least ``keep`` of the area: a cut
+    that severs a limb takes more of the rest, so the part keeps the asked
+    area instead of losing the limb's share. Bisection over the number of
+    faces taken; the largest piece grows with it.
+    """
     face_values = values[mesh.faces].mean(axis=1)
     order = np.argsort(face_values, kind="stable")
-    cumulative = np.cumsum(_face_areas(mesh.vertices, mesh.faces)[order])
-    kept = np.zeros(len(face_values), dtype=bool)
-    kept[order[:np.searchsorted(cumulative, keep * cumulative[-1]) + 1]] = True
-    return kept
+    areas = _face_areas(mesh.vertices, mesh.faces)
+    wanted = keep * areas.sum()
+
+    def taken(count: int) -> np.ndarray:
+        kept = np.zeros(len(face_values), dtype=bool)
+        kept[order[:count]] = True
+        return kept
+
+    def piece_area(count: int) -> float:
+        return float(_face_areas(mesh.vertices, _largest_piece(mesh, mesh.faces[taken(count)])).sum())
+
+    low = int(np.searchsorted(np.cumsum(areas[order]), wanted)) + 1  # enough if the piece is all of them
+    if piece_area(low) >= wanted:
+        return taken(low)
+    high = len(order)
+    while low < high:
+        middle = (low + high) // 2
+        if piece_area(middle) >= wanted:
+            high = middle
+        else:
+            low = middle + 1
+    # Rejoining a severed piece adds its area at once: of the counts just below and at the asked
+    # area, the one whose piece is nearer to it.
+    if wanted - piece_area(low - 1) < piece_area(low) - wanted:
+        low -= 1
+    return taken(low)
 
 
 def _keep_fraction(value, func: str) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < value < 1.0:
         raise ParameterError(f"{func}: keep must be a fraction of the area strictly between 0 and 1, got {value!r}.")
     return float(value)
+
+
+def _largest_piece(mesh: Mesh, faces: np.ndarray) -> np.ndarray:
+    """``(q, 3)`` int: the faces of the largest connected piece (by area) of ``faces``, no vertex pinched."""
+    # Removing faces can leave two sheets touching at one vertex: drop the faces around it until none is left.
+    while len(pinched := pinched_vertices(faces, mesh.n_vertices)):
+        faces = faces[~np.isin(faces, pinched).any(axis=1)]
+    if len(faces) == 0:
+        return faces
+    # Face adjacency through shared vertices: face f - vertex v incidence, squared.
+    incidence = sp.csr_matrix((np.ones(faces.size), (np.repeat(np.arange(len(faces)), 3), faces.ravel())),
+                              shape=(len(faces), mesh.n_vertices))
+    _, labels = connected_components(incidence @ incidence.T, directed=False)
+    areas = np.bincount(labels, _face_areas(mesh.vertices, faces))
+    return faces[labels == np.argmax(areas)]
 
 
 def submesh(mesh: Mesh, keep_faces: np.ndarray, *, name: str | None = None) -> tuple[Mesh, np.ndarray]:
@@ -73,18 +120,9 @@ def submesh(mesh: Mesh, keep_faces: np.ndarray, *, name: str | None = None) -> t
     kept : (p,) int
         Index in ``mesh`` of each vertex of ``part``.
     """
-    faces = mesh.faces[np.asarray(keep_faces, dtype=bool)]
-    # Removing faces can leave two sheets touching at one vertex: drop the faces around it until none is left.
-    while len(pinched := pinched_vertices(faces, mesh.n_vertices)):
-        faces = faces[~np.isin(faces, pinched).any(axis=1)]
+    faces = _largest_piece(mesh, mesh.faces[np.asarray(keep_faces, dtype=bool)])
     if len(faces) == 0:
         raise ParameterError(f"Nothing of {mesh.name} is left to keep: keep a larger part.")
-    # Face adjacency through shared vertices: face f - vertex v incidence, squared.
-    incidence = sp.csr_matrix((np.ones(faces.size), (np.repeat(np.arange(len(faces)), 3), faces.ravel())),
-                              shape=(len(faces), mesh.n_vertices))
-    _, labels = connected_components(incidence @ incidence.T, directed=False)
-    areas = np.bincount(labels, _face_areas(mesh.vertices, faces))
-    faces = faces[labels == np.argmax(areas)]
     kept = np.unique(faces)
     reindex = np.full(mesh.n_vertices, -1, dtype=np.int64)
     reindex[kept] = np.arange(len(kept))
@@ -97,15 +135,16 @@ def cut_by_plane(mesh: MeshLike, *, keep: float = 0.7, normal=None,
     """The part of ``mesh`` on one side of a plane, holding ``keep`` of the area.
 
     The plane is :math:`\\{x : x \\cdot n = t\\}`; the vertices with
-    :math:`x \\cdot n \\le t` stay, with :math:`t` the area-weighted
-    ``keep`` quantile of :math:`x \\cdot n` over the vertices.
+    :math:`x \\cdot n \\le t` stay, with :math:`t` the least height at
+    which the largest connected piece below it holds ``keep`` of the area
+    (the area-weighted ``keep`` quantile when the part is in one piece).
 
     Parameters
     ----------
     mesh : path, Mesh, trimesh.Trimesh or (vertices, faces)
     keep : float
-        Fraction of the area to keep, in (0, 1). The largest piece is kept,
-        so the result can hold slightly less.
+        Fraction of the area to keep, in (0, 1), held by the part (its
+        largest connected piece) up to one face.
     normal : (3,) float, optional
         Plane normal; default a random unit vector from ``random_state``.
     random_state : int or None
@@ -131,8 +170,9 @@ def remove_balls(mesh: MeshLike, *, keep: float = 0.7, n_balls: int = 3,
                  random_state: int | None = 0) -> tuple[Mesh, np.ndarray]:
     """``mesh`` without ``n_balls`` geodesic balls around random vertices, keeping ``keep`` of the area.
 
-    The balls share one radius :math:`r`, the least for which the faces
-    with :math:`\\min_c d(x, c) \\ge r` hold ``keep`` of the area;
+    The balls share one radius :math:`r`, the largest for which the largest
+    connected piece of the faces with :math:`\\min_c d(x, c) \\ge r` holds
+    ``keep`` of the area;
     :math:`d` is the heat-method geodesic distance.
 
     Parameters

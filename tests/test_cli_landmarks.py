@@ -1,5 +1,7 @@
 """``meshcorr match --landmarks FILE`` and ``--landmarks-vts`` (issue 12)."""
 
+import re
+
 import numpy as np
 import pytest
 import trimesh
@@ -59,11 +61,52 @@ def test_a_bad_landmark_line_names_the_file_and_line(meshes, tmp_path, capsys):
     assert "pairs.txt, line 2" in err and not (tmp_path / "m.txt").exists()
 
 
-def test_an_out_of_range_landmark_is_refused_before_the_work(meshes, tmp_path, capsys):
+@pytest.mark.parametrize("text, message", [
+    ("1 2\n# a comment\n3 99999\n", "pairs.txt, line 3: target vertex 99999 is outside the target mesh's "
+                                    r"vertices 0\.\.499 \(0-based\)"),
+    ("1 2\n-4 5\n", "pairs.txt, line 2: source vertex -4 is outside"),
+    ("7 2\n7 2\n1 3\n7 4\n", "pairs.txt, line 4: source vertex 7 already has another target vertex "
+                               "on line 1"),
+])
+def test_a_bad_landmark_pair_names_the_file_and_line(meshes, tmp_path, capsys, text, message):
     folder, (a, b), _ = meshes
-    (tmp_path / "pairs.txt").write_text("1 2\n3 99999\n")
+    (tmp_path / "pairs.txt").write_text(text)
     code = main(["match", a, b, "-o", str(tmp_path / "m.txt"), "--landmarks", str(tmp_path / "pairs.txt")])
-    assert code in (2, 3) and "outside the target" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert code == 3 and re.search(message, err), err
+    assert not (tmp_path / "m.txt").exists()
+
+
+def test_a_bad_vts_landmark_is_named_as_written_in_its_file(meshes, tmp_path, capsys):
+    folder, (a, b), _ = meshes
+    (tmp_path / "a.vts").write_text("5\n6\n")
+    (tmp_path / "b.vts").write_text("5\n501\n")  # the target has 500 vertices: 1..500 in a .vts
+    code = main(["match", a, b, "-o", str(tmp_path / "m.txt"), "--landmarks-vts", str(tmp_path / "a.vts"),
+                 str(tmp_path / "b.vts")])
+    err = capsys.readouterr().err
+    assert code == 3 and "b.vts, line 2: target vertex 501 is outside the target mesh's vertices 1..500 " \
+        "(1-based, as in a .vts file)" in err, err
+
+
+def test_a_vts_pair_given_twice_counts_once(meshes, tmp_path):
+    # TOSCA's own .vts pairs list some points twice; the same pair twice is no contradiction.
+    folder, (a, b), truth = meshes
+    picks = np.array([5, 60, 5, 300])
+    (tmp_path / "a.vts").write_text("".join(f"{i + 1}\n" for i in picks))
+    (tmp_path / "b.vts").write_text("".join(f"{truth[i] + 1}\n" for i in picks))
+    out = tmp_path / "map.npy"
+    assert main(["match", "--landmarks-vts", str(tmp_path / "a.vts"), str(tmp_path / "b.vts"), a, b,
+                 "-o", str(out), "-q"]) == 0
+    assert np.array_equal(np.load(out)[picks], truth[picks])
+
+
+@pytest.mark.parametrize("symmetry", ["cost", "mirror"])
+def test_landmarks_refuse_a_symmetry_that_would_set_them_aside(meshes, tmp_path, capsys, symmetry):
+    folder, (a, b), truth = meshes
+    (tmp_path / "pairs.txt").write_text(f"3 {truth[3]}\n")
+    code = main(["match", a, b, "-o", str(tmp_path / "m.txt"), "--landmarks", str(tmp_path / "pairs.txt"),
+                 "--symmetry", symmetry])
+    assert code == 2 and f"--symmetry {symmetry}" in capsys.readouterr().err
 
 
 def test_landmarks_given_twice_is_a_usage_error(meshes, tmp_path, capsys):

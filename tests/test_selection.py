@@ -6,7 +6,7 @@ from scipy.spatial import cKDTree
 
 import meshcorr
 from meshcorr import datasets
-from meshcorr.errors import ParameterError
+from meshcorr.errors import LandmarkError, ParameterError
 from meshcorr.extremities import find_extremities, match_extremities
 from meshcorr.landmark_map import check_landmarks, landmark_map
 from meshcorr.mesh import Mesh, as_mesh
@@ -174,7 +174,7 @@ def test_landmark_map_of_a_copy_is_the_identity(person):
     ([(0, 1, 2)], "pairs"),
     ([(0, 10**6)], "outside the target"),
     ([(-1, 0)], "outside the source"),
-    ([(0, 1), (0, 2)], "more than one landmark"),
+    ([(0, 1), (0, 1), (0, 2)], r"more than one landmark \(pairs 0 and 2"),
     ([(0.5, 1)], "whole numbers"),
     ([("a", "b")], "whole numbers"),
 ])
@@ -193,6 +193,19 @@ def test_a_landmark_on_a_removed_component_is_refused():
     with pytest.raises(ParameterError, match="component that was removed"):
         check_landmarks([(len(vertices) - 1, 0)], mesh, mesh)
     assert check_landmarks([(3, 4)], mesh, mesh).tolist() == [[3, 4]]
+
+
+def test_a_landmark_error_says_which_pair_and_side():
+    mesh = as_mesh(datasets.sphere(subdivisions=2))
+    with pytest.raises(LandmarkError) as caught:
+        check_landmarks([(1, 2), (3, mesh.n_vertices)], mesh, mesh)
+    assert (caught.value.row, caught.value.column, caught.value.problem, caught.value.limit) == \
+        (1, 1, "range", mesh.n_vertices)
+    with pytest.raises(LandmarkError) as caught:
+        check_landmarks([(5, 2), (1, 1), (5, 2), (5, 3)], mesh, mesh)
+    assert (caught.value.row, caught.value.first, caught.value.problem) == (3, 0, "repeat")
+    # The same pair twice counts once.
+    assert check_landmarks([(5, 2), (1, 1), (5, 2)], mesh, mesh).tolist() == [[5, 2], [1, 1]]
 
 
 def test_the_matching_cost_is_kept_when_the_whole_map_choice_keeps_the_spectral_map():

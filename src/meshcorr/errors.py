@@ -28,6 +28,22 @@ class InputError(ParameterError):
     """
 
 
+class LandmarkError(ParameterError):
+    """A user landmark pair cannot be used: an index out of range, a source vertex sent to two
+    targets, or a vertex on a removed component.
+
+    ``row`` is the pair's position in the given sequence, ``column`` 0 for its source index and
+    1 for its target index, ``problem`` one of ``"range"``, ``"repeat"``, ``"removed"``,
+    ``limit`` the mesh's vertex count (``"range"``) and ``first`` the row that gave the source
+    vertex another target first (``"repeat"``): what a caller needs to name the line of a file.
+    """
+
+    def __init__(self, message: str, *, row: int, column: int, problem: str, limit: int = 0,
+                 first: int = -1) -> None:
+        super().__init__(message)
+        self.row, self.column, self.problem, self.limit, self.first = row, column, problem, limit, first
+
+
 class OutputError(ParameterError):
     """An output cannot be written where asked (no folder, no permission, an input's path)."""
 

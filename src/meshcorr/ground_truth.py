@@ -132,6 +132,22 @@ def _read_lines(path: Path) -> list[tuple[int, str]]:
     return lines
 
 
+def read_vts_lines(path) -> tuple[np.ndarray, np.ndarray]:
+    """A ``.vts`` file's indices made 0-based as they stand (unchecked), and each one's line number, 1-based.
+
+    For messages that name a line (:func:`read_vts` checks the range).
+    """
+    path = Path(path)
+    values, numbers = [], []
+    for number, line in _read_lines(path):
+        if not re.fullmatch(r"[+-]?\d{1,18}", line):  # 18 digits: always an int64
+            raise InputError(f"{path}, line {number}: a .vts file holds one integer per line; "
+                             f"got {line[:40]!r}.")
+        values.append(int(line))
+        numbers.append(number)
+    return np.array(values, dtype=np.int64) - 1, np.array(numbers, dtype=np.int64)
+
+
 def read_vts(path, n_vertices: int | None = None) -> np.ndarray:
     """Read a TOSCA ``.vts`` file (one **1-based** vertex index per line).
 
@@ -153,13 +169,7 @@ def read_vts(path, n_vertices: int | None = None) -> np.ndarray:
         (the file is then probably 0-based) or > ``n_vertices``.
     """
     path = Path(path)
-    values = []
-    for number, line in _read_lines(path):
-        if not re.fullmatch(r"[+-]?\d{1,18}", line):  # 18 digits: always an int64
-            raise InputError(f"{path}, line {number}: a .vts file holds one integer per line; "
-                             f"got {line[:40]!r}.")
-        values.append(int(line))
-    vts = np.array(values, dtype=np.int64)
+    vts = read_vts_lines(path)[0] + 1
     if vts.min() < 1:
         raise InputError(
             f"{path} holds index {int(vts.min())}, but .vts indices are 1-based (>= 1). "

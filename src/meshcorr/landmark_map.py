@@ -27,7 +27,7 @@ from typing import Callable
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .errors import InputError, ParameterError
+from .errors import InputError, LandmarkError, ParameterError
 from .ground_truth import index_fields, read_index_lines
 from .mesh import Mesh
 
@@ -81,8 +81,11 @@ def check_landmarks(landmarks, source: Mesh, target: Mesh) -> np.ndarray | None:
     Raises
     ------
     ParameterError
-        Not pairs of integers, an index out of range, a source vertex given
-        twice, or a vertex that was removed with a dropped component.
+        Not pairs of integers.
+    LandmarkError
+        An index out of range, a source vertex given two different targets,
+        or a vertex that was removed with a dropped component (a pair given
+        twice is kept once).
     """
     if landmarks is None:
         return None
@@ -105,22 +108,30 @@ def check_landmarks(landmarks, source: Mesh, target: Mesh) -> np.ndarray | None:
         bad = (table[:, column] < 0) | (table[:, column] >= mesh.n_input)  # not on a hole's cap
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
-            raise ParameterError(f"Landmark {row} has {side} index {int(table[row, column])}, outside the "
-                                 f"{side} mesh's vertices [0, {mesh.n_input}). Indices are 0-based.")
-    values, counts = np.unique(table[:, 0], return_counts=True)
+            raise LandmarkError(f"Landmark {row} has {side} index {int(table[row, column])}, outside the "
+                                f"{side} mesh's vertices [0, {mesh.n_input}). Indices are 0-based.",
+                                row=row, column=column, problem="range", limit=mesh.n_input)
+    # The same pair given twice says nothing new (a .vts pair may list a point twice); a source
+    # vertex sent to two different targets is a contradiction. Rows keep their given numbers.
+    rows = np.sort(np.unique(table, axis=0, return_index=True)[1])
+    sources, counts = np.unique(table[rows, 0], return_counts=True)
     if (counts > 1).any():
-        raise ParameterError(f"Source vertex {int(values[counts > 1][0])} has more than one landmark; "
-                             "give each source vertex at most one target vertex.")
+        given = np.flatnonzero(table[:, 0] == sources[counts > 1][0])
+        first, row = int(given[0]), int(given[table[given, 1] != table[given[0], 1]][0])
+        raise LandmarkError(f"Source vertex {int(table[row, 0])} has more than one landmark (pairs {first} and "
+                            f"{row}: target vertices {int(table[first, 1])} and {int(table[row, 1])}); give each "
+                            "source vertex at most one target vertex.",
+                            row=row, column=0, problem="repeat", first=first)
     local = []
     for column, mesh, side in ((0, source, "source"), (1, target, "target")):
         lookup = np.full(mesh.n_original, -1, dtype=np.int64)
         lookup[mesh.kept] = np.arange(mesh.n_vertices)
-        mapped = lookup[table[:, column]]
+        mapped = lookup[table[rows, column]]
         if (mapped < 0).any():
-            row = int(np.flatnonzero(mapped < 0)[0])
-            raise ParameterError(f"Landmark {row}: {side} vertex {int(table[row, column])} lies on a "
-                                 "component that was removed (largest_component=True); choose a vertex "
-                                 "on the largest component.")
+            row = int(rows[np.flatnonzero(mapped < 0)[0]])
+            raise LandmarkError(f"Landmark {row}: {side} vertex {int(table[row, column])} lies on a "
+                                "component that was removed (largest_component=True); choose a vertex "
+                                "on the largest component.", row=row, column=column, problem="removed")
         local.append(mapped)
     return np.stack(local, axis=1)
 
@@ -145,14 +156,20 @@ def read_landmarks(path: str | os.PathLike) -> np.ndarray:
         A missing, non-text or empty file, or a line that is not two integers
         (named by its number).
     """
+    return read_landmark_lines(path)[0]
+
+
+def read_landmark_lines(path: str | os.PathLike) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`read_landmarks`, and the 1-based line number of each pair ``(L,)`` int (for messages)."""
     path = Path(path)
-    pairs = []
+    pairs, numbers = [], []
     for number, line in read_index_lines(path, kind="landmark"):
         values = index_fields(line)
         if values is None or len(values) != 2:
             raise InputError(f"{path}, line {number}: expected a 0-based vertex pair 'source_index "
                              f"target_index'; got {line[:40]!r}.")
         pairs.append(values)
+        numbers.append(number)
     if not pairs:
         raise InputError(f"{path}: the landmark file holds no pairs.")
-    return np.array(pairs, dtype=np.int64)
+    return np.array(pairs, dtype=np.int64), np.array(numbers, dtype=np.int64)

@@ -144,8 +144,12 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
     symmetry : {"auto", "cost", "mirror"}
         How to choose among near-tied eigenvector configurations (the
         left/right mirror, :mod:`meshcorr.symmetry`): "auto" keeps the
-        orientation-preserving map whose curvature agrees best; "cost" the cheapest
-        configuration (the paper); "mirror" the alternative "auto" keeps.
+        orientation-preserving map whose curvature agrees best, then the
+        whole-map choice (``extremities``, ``landmarks``); "cost" the cheapest
+        configuration (the paper); "mirror" the configuration of the other
+        orientation than "auto"'s (it may be the cheapest, and then the same
+        map as "cost"). "cost" and "mirror" skip the whole-map choice and do
+        not go with ``landmarks`` (:class:`ParameterError`).
     refine : bool
         Refine the map by ZoomOut spectral upsampling (:mod:`meshcorr.refine`).
     refine_k : int
@@ -248,6 +252,10 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         shapes = pair_shapes(source, target, settings)
         src, tgt = as_meshes(*shapes)
         pairs = check_landmarks(landmarks, src, tgt)
+    if pairs is not None and symmetry != "auto":
+        raise ParameterError(f"Landmarks settle the left/right choice in the whole-map choice (symmetry='auto'); "
+                             f"symmetry={symmetry!r} (--symmetry {symmetry}) would set them aside. Keep "
+                             "symmetry='auto' (the default) with landmarks.")
     if partial is not None:  # a part against the whole: meshcorr.partial; the default mode gives one start
         spectral_options = dict(k=k, geodesic=geodesic, scale_eigenvalues=scale_eigenvalues, reorder=reorder,
                                 icp_iterations=icp_iterations, n_control=n_control, anneal=anneal,

@@ -6,9 +6,10 @@ import argparse
 import json
 import os
 import sys
+from contextlib import contextmanager
 
 from ..baselines import METHODS, SPATIAL_METHODS
-from ..errors import ParameterError
+from ..errors import InputError, LandmarkError, ParameterError
 from ..geodesics import GEODESIC_METHODS
 from ..modes import MODES, N_SAMPLES, SCALABLE_ABOVE
 from ..pipeline import REFINE_K
@@ -92,9 +93,12 @@ def add_parser(sub) -> None:
     g.add_argument("--seed", type=seed, default=0, help="random seed, an integer >= 0 (default: 0)")
     g.add_argument("--symmetry", choices=("auto", "cost", "mirror"), default="auto",
                    help="choice among near-tied eigenvector configurations: auto keeps the "
-                        "orientation-preserving map whose curvature agrees best (resolves the left/right "
-                        "mirror and front/back half turns), cost the cheapest "
-                        "configuration (the paper), mirror the other one (default: auto)")
+                        "orientation-preserving map whose curvature agrees best, then makes the whole-map "
+                        "choice with the extremities and --landmarks (resolves the left/right mirror and "
+                        "front/back half turns); cost keeps the cheapest configuration (the paper); mirror "
+                        "the configuration of the other orientation than auto's (the same map as cost when "
+                        "that is the cheapest). cost and mirror skip the whole-map choice and do not go "
+                        "with --landmarks (default: auto)")
     g.add_argument("--refine", action=argparse.BooleanOptionalAction, default=True,
                    help="refine the map by ZoomOut spectral upsampling (default: on)")
     g.add_argument("--refine-k", type=int, default=REFINE_K, metavar="K",
@@ -181,7 +185,6 @@ def progress_for(args, label: str) -> StageProgress | None:
 
 
 def run(args) -> int:
-    from .. import match
     from ..io import check_outputs, staged_writes, write_map
 
     if (args.landmarks_file is not None and args.landmarks_file.strip().isdigit()
@@ -204,22 +207,11 @@ def run(args) -> int:
     inputs.update({f"--landmarks-vts {v}": v for v in args.landmarks_vts or ()})
     check_outputs({"-o": args.output, "--alternative-out": args.alternative_out, "--report": args.report},
                   inputs)
-    landmarks = _read_landmarks(args)
+    landmarks, lines = _read_landmarks(args)
     if args.verbose:
         print(f"meshcorr: matching {args.source} -> {args.target}", file=sys.stderr)
-    result = match(args.source, args.target, symmetry=args.symmetry, refine=args.refine,
-                   anchor_scale=args.anchor_scale, k=args.k, geodesic=args.geodesic,
-                   scale_eigenvalues=args.scale_eigenvalues, reorder=args.reorder,
-                   icp_iterations=args.icp_iterations, n_control=args.n_control, anneal=args.anneal,
-                   n_anchors=args.n_anchors, anchor_weight=args.anchor_weight, bijective=args.bijective,
-                   largest_component=args.largest_component, random_state=args.seed,
-                   progress=progress_for(args, f"{os.path.basename(args.source)} -> "
-                                               f"{os.path.basename(args.target)}"),
-                   method=args.method, prealign=args.prealign, mode=args.mode,
-                   n_samples=args.n_samples, max_memory=args.max_memory,
-                   scalable_above=args.scalable_above, refine_k=args.refine_k, shells=args.shells, landmarks=landmarks,
-                   extremities=args.extremities, oriented_starts=args.oriented_starts, partial=args.partial,
-                   fill_holes=args.fill_holes)
+    with _landmark_lines(lines):
+        result = _match(args, landmarks)
     if args.alternative_out and result.alternative_map is None:
         raise ParameterError(f"No alternative map to write to {args.alternative_out}: only the spectral "
                              "method with at least two eigenvector configurations has one.")
@@ -261,23 +253,73 @@ def run(args) -> int:
     return 0
 
 
+def _match(args, landmarks):
+    """``meshcorr.match`` with the options of ``meshcorr match``."""
+    from .. import match
+
+    return match(args.source, args.target, symmetry=args.symmetry, refine=args.refine,
+                   anchor_scale=args.anchor_scale, k=args.k, geodesic=args.geodesic,
+                   scale_eigenvalues=args.scale_eigenvalues, reorder=args.reorder,
+                   icp_iterations=args.icp_iterations, n_control=args.n_control, anneal=args.anneal,
+                   n_anchors=args.n_anchors, anchor_weight=args.anchor_weight, bijective=args.bijective,
+                   largest_component=args.largest_component, random_state=args.seed,
+                   progress=progress_for(args, f"{os.path.basename(args.source)} -> "
+                                               f"{os.path.basename(args.target)}"),
+                   method=args.method, prealign=args.prealign, mode=args.mode,
+                   n_samples=args.n_samples, max_memory=args.max_memory,
+                   scalable_above=args.scalable_above, refine_k=args.refine_k, shells=args.shells, landmarks=landmarks,
+                   extremities=args.extremities, oriented_starts=args.oriented_starts, partial=args.partial,
+                   fill_holes=args.fill_holes)
+
+
 def _read_landmarks(args):
-    """The ``(L, 2)`` landmark pairs of ``--landmarks`` or ``--landmarks-vts``, or None."""
-    from ..landmark_map import read_landmarks
+    """The ``(L, 2)`` pairs of ``--landmarks`` or ``--landmarks-vts`` (or None), and where each came from.
+
+    The second item: for each pair a function of its column (0: source, 1: target) giving the
+    file and line number it was read from, the index as written there and the index base (1 in a
+    ``.vts``).
+    """
+    from ..landmark_map import read_landmark_lines
 
     if args.landmarks_file is not None:
-        return read_landmarks(args.landmarks_file)
+        pairs, numbers = read_landmark_lines(args.landmarks_file)
+        return pairs, [lambda column, n=n, pair=pair: (args.landmarks_file, int(n), int(pair[column]), 0)
+                       for n, pair in zip(numbers, pairs)]
     if args.landmarks_vts:
         import numpy as np
 
-        from ..ground_truth import read_vts
+        from ..ground_truth import read_vts_lines
 
-        a, b = (read_vts(path) for path in args.landmarks_vts)
+        (a, lines_a), (b, lines_b) = (read_vts_lines(path) for path in args.landmarks_vts)
         if len(a) != len(b):
             raise ParameterError(f"--landmarks-vts: {args.landmarks_vts[0]} has {len(a)} lines and "
                                  f"{args.landmarks_vts[1]} has {len(b)}; line k of each must be landmark k.")
-        return np.stack([a, b], axis=1)
-    return None
+        pairs = np.stack([a, b], axis=1)
+        return pairs, [lambda column, row=row: (args.landmarks_vts[column], int((lines_a, lines_b)[column][row]),
+                                                int(pairs[row, column]) + 1, 1) for row in range(len(pairs))]
+    return None, []
+
+
+@contextmanager
+def _landmark_lines(lines):
+    """Turn a :class:`~meshcorr.errors.LandmarkError` into an input error naming the file's line (exit 3)."""
+    try:
+        yield
+    except LandmarkError as error:
+        if not lines:
+            raise
+        path, number, value, base = lines[error.row](error.column)
+        side = ("source", "target")[error.column]
+        if error.problem == "range":
+            reason = (f"{side} vertex {value} is outside the {side} mesh's vertices {base}..{error.limit - 1 + base} "
+                      f"({'1-based, as in a .vts file' if base else '0-based'}).")
+        elif error.problem == "repeat":
+            reason = (f"source vertex {value} already has another target vertex on line {lines[error.first](0)[1]}; "
+                      "give each source vertex one target vertex.")
+        else:
+            reason = (f"{side} vertex {value} lies on a component that was removed (--largest-component); "
+                      "choose a vertex on the largest component.")
+        raise InputError(f"{path}, line {number}: {reason}") from None
 
 
 def _write_report(args, mapping, summary: dict) -> None:

@@ -275,6 +275,31 @@ def test_points_on_a_line_or_at_one_place_are_refused():
         as_mesh(np.ones((50, 3)))
 
 
+@pytest.mark.parametrize("jitter", [0.0, 1e-6])
+def test_a_line_with_a_point_off_it_is_refused_as_curves(jitter):
+    # One point off the line passes the global test; the solvers' local triangulation then failed
+    # with an internal error (geometry-central: "unreferenced vertex").
+    points = np.zeros((300, 3))
+    points[:, 0] = np.linspace(0, 1, 300)
+    points[:-1, 1:] = np.random.default_rng(0).normal(scale=jitter, size=(299, 2))
+    points[-1] = [0.5, 0.3, 0.1]
+    with pytest.raises(MeshError, match="299 of its 300 points have their 30 nearest neighbours on one straight "
+                                        "line"):
+        meshcorr.match(points, sphere_points(300))
+
+
+def test_a_failed_local_triangulation_is_a_mesh_error(monkeypatch):
+    import potpourri3d
+
+    def refuse(*args, **kwargs):
+        raise RuntimeError("GC_SAFETY_ASSERT FAILURE from surface_mesh.cpp:139 - unreferenced vertex 7")
+
+    monkeypatch.setattr(potpourri3d, "PointCloudHeatSolver", refuse)
+    with pytest.raises(MeshError, match="local triangulation for its geodesics .*unreferenced vertex 7.*Sample "
+                                        "the surface more evenly"):
+        geodesic_solver(sphere_points(100), np.zeros((0, 3), dtype=int), "heat")
+
+
 def test_a_cloud_in_separate_clusters_is_refused_or_its_largest_kept():
     big, small = sphere_points(600), sphere_points(100, seed=1) * 0.5 + 10.0
     points = np.vstack([small, big])

@@ -42,6 +42,7 @@ from scipy.sparse.csgraph import dijkstra
 
 from .errors import ParameterError
 from .pointcloud import edges as graph_edges
+from .pointcloud import triangulation_failed
 
 GEODESIC_METHODS = ("heat", "fmm", "exact", "dijkstra")
 #: The solvers that work on point clouds.
@@ -126,7 +127,10 @@ def geodesic_solver(vertices: np.ndarray, faces: np.ndarray, method: str = "heat
     if len(faces) == 0 and method == "heat":
         import potpourri3d as pp3d
 
-        cloud = pp3d.PointCloudHeatSolver(vertices)
+        try:
+            cloud = pp3d.PointCloudHeatSolver(vertices)
+        except RuntimeError as error:
+            raise triangulation_failed(error, "its geodesics (the heat method)") from None
         return _PerSourceSolver(n, cloud.compute_distance, progress)
     if method == "heat":
         import potpourri3d as pp3d

@@ -30,7 +30,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from .pointcloud import N_NEIGHBORS
+from .pointcloud import N_NEIGHBORS, triangulation_failed
 
 __all__ = ["laplacian", "vertex_areas", "MOLLIFY_FACTOR"]
 
@@ -60,8 +60,11 @@ def laplacian(mesh) -> tuple[sp.csc_matrix, np.ndarray]:
         if mesh.is_cloud:
             import robust_laplacian
 
-            L, M = robust_laplacian.point_cloud_laplacian(V, mollify_factor=MOLLIFY_FACTOR,
-                                                          n_neighbors=min(N_NEIGHBORS, len(V) - 1))
+            try:
+                L, M = robust_laplacian.point_cloud_laplacian(V, mollify_factor=MOLLIFY_FACTOR,
+                                                              n_neighbors=min(N_NEIGHBORS, len(V) - 1))
+            except RuntimeError as error:
+                raise triangulation_failed(error, "its Laplacian") from None
             mass = np.asarray(M.diagonal(), dtype=np.float64)
         else:
             import potpourri3d as pp3d

@@ -35,7 +35,8 @@ from scipy.spatial import cKDTree
 from .errors import MeshError
 from .validate import _as_array, _check_finite, _plural, _which
 
-__all__ = ["N_NEIGHBORS", "RING_NEIGHBORS", "MIN_POINTS", "edges", "knn_graph", "validate_cloud"]
+__all__ = ["N_NEIGHBORS", "RING_NEIGHBORS", "MIN_POINTS", "edges", "knn_graph", "triangulation_failed",
+           "validate_cloud"]
 
 #: Neighbours of the cloud Laplacian and heat solver, and of the connectivity check.
 N_NEIGHBORS = 30
@@ -45,6 +46,12 @@ RING_NEIGHBORS = 8
 MIN_POINTS = N_NEIGHBORS + 1
 #: A cloud whose second principal extent is below this fraction of the first is a line.
 _FLAT_RTOL = 1e-9
+#: A point whose :data:`N_NEIGHBORS` neighbours' second principal extent is below this fraction of
+#: the first lies on a curve, not a surface (a surface sample's neighbourhood: 0.3-1).
+_CURVE_RTOL = 1e-3
+#: Share of such points from which a cloud is refused: it samples curves (the local triangulation
+#: of potpourri3d's solvers then fails; a 300-point line with one point off it was measured).
+_CURVE_SHARE = 0.5
 
 
 def knn_graph(points: np.ndarray, k: int) -> sp.csr_matrix:
@@ -116,6 +123,32 @@ def _check_extent(points: np.ndarray, name: str) -> None:
     if extent[1] <= _FLAT_RTOL * extent[0]:
         raise MeshError(f"{name}: all {len(points)} points lie on one straight line, so they sample no "
                         "surface. A point cloud must sample a surface in 3-D.")
+
+
+def _check_curves(points: np.ndarray, name: str) -> None:
+    """Refuse a cloud most of whose points have their neighbours on one line: it samples curves."""
+    neighbours = cKDTree(points).query(points, k=min(N_NEIGHBORS + 1, len(points)))[1]
+    patches = points[neighbours]
+    extent = np.linalg.svd(patches - patches.mean(axis=1, keepdims=True), compute_uv=False)
+    on_curves = extent[:, 1] <= _CURVE_RTOL * extent[:, 0]
+    if on_curves.mean() >= _CURVE_SHARE:
+        raise MeshError(f"{name}: {on_curves.sum()} of its {len(points)} points have their {N_NEIGHBORS} nearest "
+                        "neighbours on one straight line, so the cloud samples lines, not a surface. A point "
+                        "cloud must sample a surface in 3-D densely enough that each point's neighbours "
+                        "spread in two directions.")
+
+
+def triangulation_failed(error: RuntimeError, what: str) -> MeshError:
+    """The error to raise when a cloud solver of potpourri3d / robust_laplacian refuses the points.
+
+    Their local triangulations (geometry-central) assert on neighbourhoods that span no triangle;
+    :func:`validate_cloud` refuses the clouds known to do that, and this names any other case
+    instead of an internal error.
+    """
+    detail = str(error).strip().splitlines()[0][-160:] if str(error).strip() else type(error).__name__
+    return MeshError(f"The point cloud's local triangulation for {what} failed ({detail}): some points' "
+                     "neighbourhoods span no surface (points on lines, or very uneven sampling). Sample the "
+                     "surface more evenly, or pass a mesh.")
 
 
 def _check_duplicates(points: np.ndarray, name: str) -> None:
@@ -211,4 +244,5 @@ def validate_cloud(points, *, min_vertices: int = 3, largest_component: bool = F
     _check_duplicates(points, name)
     kept = _select_cluster(points, largest_component, name)
     check_count(len(kept))
+    _check_curves(points[kept], name)
     return points[kept], kept

@@ -177,6 +177,19 @@ def test_colorings_are_valid():
     np.testing.assert_array_equal(ends, [[68, 1, 84], [253, 231, 37], [170, 170, 170]])
 
 
+def test_a_cloud_is_coloured_by_parts_like_its_mesh():
+    # A cloud has no edges: its parts used to be all grey but for the seeds.
+    shape = datasets.creature(resolution=1)
+    mesh_colors = part_colors(shape.vertices, shape.faces)
+    cloud_colors = part_colors(shape.vertices, np.zeros((0, 3), dtype=int))
+    grey = np.all(cloud_colors == cloud_colors[:, :1], axis=1)
+    assert grey.mean() < 0.05
+    assert len(np.unique(cloud_colors, axis=0)) > 50
+    # The same seeds: each vertex's colour is near its mesh colour for most of the shape.
+    close = np.linalg.norm(cloud_colors.astype(float) - mesh_colors, axis=1) < 60
+    assert close.mean() > 0.8
+
+
 def _ply_colors(path) -> np.ndarray:
     import trimesh
 
@@ -255,6 +268,27 @@ def test_transfer_errors_are_one_line(pair, tmp_path, capsys):
         err = capsys.readouterr().err
         assert err.startswith("meshcorr: error:") and message in err, err
     assert not list(tmp_path.glob("*.ply"))
+
+
+def test_colours_move_between_clouds(tmp_path, capsys):
+    # A cloud target's colours: a PLY of coloured points is read as a cloud; a .npy has none.
+    import trimesh
+
+    points = np.asarray(datasets.creature(resolution=1).vertices)
+    colours = np.random.default_rng(0).integers(0, 256, size=(len(points), 3)).astype(np.uint8)
+    trimesh.PointCloud(points, colors=colours).export(tmp_path / "target.ply")
+    np.save(tmp_path / "target.npy", points)
+    np.savetxt(tmp_path / "source.xyz", points)
+    order = np.random.default_rng(1).permutation(len(points))
+    np.savetxt(tmp_path / "map.txt", order, fmt="%d")
+    base = [str(tmp_path / "source.xyz")]
+    assert main(["transfer", *base, str(tmp_path / "target.ply"), str(tmp_path / "map.txt"),
+                 "--attribute", "colors", "-o", str(tmp_path / "out.ply"), "-q"]) == 0
+    moved = trimesh.load(tmp_path / "out.ply", process=False)
+    np.testing.assert_array_equal(np.asarray(moved.colors)[:, :3], colours[order])
+    assert main(["transfer", *base, str(tmp_path / "target.npy"), str(tmp_path / "map.txt"),
+                 "--attribute", "colors", "-o", str(tmp_path / "none.ply")]) == 2
+    assert "target.npy has no per-vertex colours" in capsys.readouterr().err
 
 
 def test_embed_draws_eigenvectors(pair, tmp_path, capsys):

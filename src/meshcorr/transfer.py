@@ -130,9 +130,16 @@ def read_attribute(spec: str, target_path, vertices, faces) -> np.ndarray:
     if spec == "colors":
         import trimesh
 
-        loaded = trimesh.load(target_path, process=False, force="mesh")
-        colors = getattr(loaded.visual, "vertex_colors", None)
-        if loaded.visual.kind != "vertex" or colors is None or len(colors) != n:
+        colors = None
+        try:  # a mesh, or a cloud of points (a PLY of vertices only loads as trimesh.PointCloud)
+            loaded = trimesh.load(target_path, process=False, force="mesh" if len(faces) else None)
+        except (NotImplementedError, ValueError, OSError):  # .npy / .xyz: points only, no colours
+            loaded = None
+        if isinstance(loaded, trimesh.PointCloud):
+            colors = loaded.colors if len(loaded.colors) else None
+        elif loaded is not None and getattr(loaded.visual, "kind", None) == "vertex":
+            colors = loaded.visual.vertex_colors
+        if colors is None or len(colors) != n:
             raise ParameterError(
                 f"{target_path} has no per-vertex colours. Use a PLY/OBJ with vertex colours, "
                 "or --attribute parts|xyz|FILE."

@@ -19,6 +19,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from .._params import check_choice, check_int
+from ..pointcloud import edges as graph_edges
 
 __all__ = ["COLORINGS", "COLORMAPS", "UNMAPPED_COLOR", "coordinate_colors", "mesh_coloring",
            "part_colors", "scalar_colors"]
@@ -104,9 +105,8 @@ def coordinate_colors(vertices) -> np.ndarray:
 
 
 def _edge_graph(vertices: np.ndarray, faces: np.ndarray):
-    """Sparse symmetric graph of mesh edges weighted by their length."""
-    edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    edges = np.unique(np.sort(edges, axis=1), axis=0)
+    """Sparse symmetric graph of mesh edges weighted by their length (a cloud's: its one-ring neighbours)."""
+    edges = graph_edges(vertices, faces.reshape(-1, 3))
     edges = edges[edges[:, 0] != edges[:, 1]]
     length = np.linalg.norm(vertices[edges[:, 0]] - vertices[edges[:, 1]], axis=1)
     length = np.maximum(length, 1e-12)  # a zero weight would mean "no edge" to csgraph
@@ -136,6 +136,8 @@ def part_colors(vertices, faces, *, n_parts: int = 8, softness: float = 0.06) ->
     ----------
     vertices : (n, 3) float
     faces : (m, 3) int
+        Triangles; ``m = 0`` for a point cloud (its graph joins each point to
+        its nearest neighbours, :func:`meshcorr.pointcloud.edges`).
     n_parts : int
         Seeds (at most 10 distinct colours; more repeat the palette).
     softness : float

@@ -77,6 +77,13 @@ def test_matcher_get_set_params_and_repr():
     assert Matcher(Settings(k=4), k=3).get_params()["k"] == 3
 
 
+def test_a_matcher_with_bad_settings_still_prints_and_fit_names_the_problem():
+    matcher = Matcher(n_landmarks=50)  # stored as given, validated by fit (scikit-learn's convention)
+    assert repr(matcher) == "Matcher(n_landmarks=50)"
+    with pytest.raises(ParameterError, match="'n_landmarks' is now 'n_samples'"):
+        matcher.fit(ds.sphere(subdivisions=1), ds.sphere(subdivisions=1))
+
+
 def test_matcher_gives_match_s_map(result, shape, copy_and_truth):
     copy, truth = copy_and_truth
     np.testing.assert_array_equal(result.map, truth)

@@ -260,7 +260,8 @@ def test_batch_checks_its_input_before_any_work(shapes, tmp_path):
             batch(all_pairs(paths[:2]), tmp_path, **options)
     with pytest.raises(ParameterError, match="has no pairs"):
         batch([], tmp_path)
-    with pytest.raises(ParameterError, match="same map file"):
+    with pytest.raises(ParameterError, match=r"same map file c0__c1\.\w+ \(.*c0.off -> .*c1.off and .*c0.off -> "
+                                             r".*x/c1.off\)"):
         batch([(paths[0], paths[1]), (paths[0], str(tmp_path / "x" / "c1.off"))], tmp_path)
     with pytest.raises(ParameterError, match="'identity' or a folder of SHAPE.vts"):
         batch(all_pairs(paths[:2]), tmp_path, ground_truth="truth.txt")

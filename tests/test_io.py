@@ -321,7 +321,10 @@ def test_xyz_text_of_points(tmp_path):
     np.testing.assert_array_equal(vertices, [[0, 0, 0], [1, 0, 0], [0, 1, 0.5]])
     assert faces.shape == (0, 3)
     path.write_text("0 0 0\n1 x 0\n")
-    with pytest.raises(MeshError, match="points.xyz, line 2: expected 'x y z'"):
+    with pytest.raises(MeshError, match="points.xyz, line 2: expected 'x y z'.*Repair the line"):
+        read_mesh(path)
+    path.write_text("x y z\n0 0 0\n")  # a header line, not commented out
+    with pytest.raises(MeshError, match="points.xyz, line 1: expected 'x y z'.*Start a header line with '#'"):
         read_mesh(path)
     path.write_text("# only a comment\n")
     with pytest.raises(MeshError, match="holds no points"):

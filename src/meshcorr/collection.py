@@ -190,8 +190,11 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
         raise ParameterError("The batch has no pairs: give --pairs FILE, --all-pairs SHAPES or --template T SHAPES.")
     names = [map_name(a, b) for a, b in pairs]
     if len(set(names)) != len(names):
-        raise ParameterError("Two pairs would write the same map file (meshes with the same file name in "
-                             "different folders): rename the meshes so that their names are distinct.")
+        name = next(n for n in names if names.count(n) > 1)
+        clash = [f"{a} -> {b}" for (a, b), n in zip(pairs, names) if n == name][:2]
+        raise ParameterError(f"Two pairs would write the same map file {name} ({clash[0]} and {clash[1]}): maps "
+                             "are named after the meshes' file names without folder and extension. Rename the "
+                             "meshes so that those names are distinct.")
     if ground_truth is not None and ground_truth != "identity" and not Path(ground_truth).is_dir():
         raise ParameterError(f"The ground truth must be 'identity' or a folder of SHAPE.vts files. "
                              f"Got {ground_truth!r}, which is not a folder.")

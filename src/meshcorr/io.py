@@ -171,8 +171,10 @@ def _read_xyz(data: bytes, label: str) -> np.ndarray:
                 raise ValueError
             rows.append((float(fields[0]), float(fields[1]), float(fields[2])))
         except ValueError:
+            hint = ("Start a header line with '#' (a comment)" if not rows and any(c.isalpha() for c in line)
+                    else "Repair the line or re-export the points")
             raise MeshError(f"{label}, line {number}: expected 'x y z' (three numbers, further columns "
-                            f"ignored), got {line.strip()[:60]!r}. Repair the line or re-export the points.") from None
+                            f"ignored), got {line.strip()[:60]!r}. {hint}.") from None
     if not rows:
         raise MeshError(f"{label}: the file holds no points (only comments or blank lines).")
     return np.array(rows, dtype=np.float64)

@@ -10,6 +10,7 @@ work.
 
 from __future__ import annotations
 
+from .errors import MeshcorrError
 from .mesh import MeshLike
 from .progress import as_progress
 from .result import Correspondence
@@ -102,6 +103,9 @@ class Matcher:
         return result
 
     def __repr__(self) -> str:
-        changed = self._settings().changed() if self.settings is not None or self.options else {}
+        try:
+            changed = self._settings().changed() if self.settings is not None or self.options else {}
+        except MeshcorrError:  # settings not valid (yet): shown as given; fit() says what is wrong
+            changed = dict(self.options)
         inner = ", ".join(f"{key}={value!r}" for key, value in changed.items())
         return f"Matcher({inner})"

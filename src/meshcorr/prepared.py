@@ -45,6 +45,7 @@ from __future__ import annotations
 import hashlib
 import io
 import json
+import os
 from dataclasses import fields
 
 import numpy as np
@@ -375,7 +376,8 @@ def pair_shapes(source: MeshLike | PreparedShape, target: MeshLike | PreparedSha
             shape.check(settings, role=role)
             shapes.append(shape)
         else:
-            shapes.append(load_mesh(shape, settings, name=role))
+            # A file is named by its path in messages; arrays and objects by their role.
+            shapes.append(load_mesh(shape, settings, name=None if isinstance(shape, (str, os.PathLike)) else role))
     return shapes[0], shapes[1]
 
 

@@ -11,7 +11,7 @@ from meshcorr.extremities import find_extremities, match_extremities
 from meshcorr.landmark_map import check_landmarks, landmark_map
 from meshcorr.mesh import Mesh, as_mesh
 from meshcorr.orientation import orientation_score, regional_orientation
-from meshcorr.selection import MapCandidate, choose_map, energy, score_candidates
+from meshcorr.selection import ORIENTATION_MIN, MapCandidate, choose_map, energy, score_candidates
 from meshcorr.shells import shell_refine
 
 # A left/right symmetric "person" on a sphere: head, two arms, two legs, a nose in front.
@@ -119,6 +119,14 @@ def test_landmarks_settle_the_left_right_choice(person):
     pairs = [(int(i), int(truth[i])) for i in picks]
     result = meshcorr.match((mesh.vertices, mesh.faces), (target.vertices, target.faces), landmarks=pairs)
     assert np.mean(result.map == truth) > 0.9
+    # Every candidate reports the energy the choice minimised; the chosen map has the least among
+    # the maps that keep the most landmarks and the orientation.
+    eligible = [c for c in result.map_candidates
+                if c["landmarks_kept"] == max(d["landmarks_kept"] for d in result.map_candidates)
+                and c["orientation"] >= ORIENTATION_MIN]
+    chosen = [c for c in result.map_candidates if c["chosen"]][0]
+    assert all(np.isfinite(c["energy"]) and c["energy"] > 0 for c in result.map_candidates)
+    assert chosen["energy"] == min(c["energy"] for c in eligible)
 
 
 def test_the_landmarks_distances_join_the_shells_on_the_fine_schedule(person, monkeypatch):

@@ -80,7 +80,7 @@ from .landmarks import farthest_point_sampling
 from .mesh import Mesh
 from .orientation import mesh_orientation, vertex_normals
 from .refine import _nearest_rows, laplace_basis
-from .selection import LANDMARK_RADIUS, MapCandidate, choose_map, score_orientation
+from .selection import LANDMARK_RADIUS, MapCandidate, candidate_summaries, choose_map, score_orientation
 from .shells import shell_refine
 from .timing import StageTimer
 
@@ -721,7 +721,7 @@ def match_part(part: Mesh, whole: Mesh, part_rows: RowFn, whole_rows: RowFn, *, 
     with timer.stage("region"):
         _, scale = fitted_distortion(part_rows, whole_rows, mapping, _sources(interior, random_state), interior)
         region = part_region(part, whole, mapping, scale)
-    summaries = [dict(c.to_dict(), chosen=c is chosen, alternative=c is alternative) for c in candidates]
+    summaries = candidate_summaries(candidates, chosen, alternative, reliable=reliable)
     return PartialMap(mapping=mapping, alternative=None if alternative is None else alternative.mapping,
                       region=region, area_fraction=_area_fraction(whole, region), scale=scale,
                       candidates=summaries, reliable=reliable, history=history)

@@ -44,7 +44,7 @@ from .refine import prefetch_bases, refine_map
 from .reorder import REORDER_MODES, Configuration, rank_configurations
 from .result import Correspondence
 from .repair import repair_candidates
-from .selection import MapCandidate, choose_map, score_candidates, shell_candidates
+from .selection import MapCandidate, candidate_summaries, choose_map, score_candidates, shell_candidates
 from .shells import shell_refine
 from .symmetry import (SYMMETRY_MODES, WIDE_CANDIDATES, Candidate, candidate_ranks, choose, metric_distortion,
                        right_map_missing)
@@ -515,7 +515,7 @@ def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, s
     if pairs is not None:
         mapping[pairs[:, 0]] = pairs[:, 1]
     other = alternative.mapping if alternative is not None else spectral_other
-    summaries = [dict(c.to_dict(), chosen=c is chosen, alternative=c is alternative) for c in candidates]
+    summaries = candidate_summaries(candidates, chosen, alternative, reliable=reliable)
     shelled = bool(chosen.extra.get("shells"))
     return _Choice(mapping, other, summaries, chosen.origin == "spectral" and pairs is None and not shelled,
                    shelled, chosen.orientation if pairs is None and np.isfinite(chosen.orientation) else None)

@@ -110,11 +110,23 @@ class Correspondence:
         Per ZoomOut iteration (:mod:`meshcorr.refine`): basis size, fraction changed.
     map_candidates : list of dict
         The complete maps judged by the whole-map choice
-        (:mod:`meshcorr.selection`): origin ("spectral", "extremities-r",
-        "landmarks"), orientation, distortion, regional orientation, landmark
-        error, and ``chosen`` / ``alternative`` flags. Empty when that stage
-        did not run (``symmetry="cost"`` or ``"mirror"``, ``extremities=False``
-        without landmarks).
+        (:mod:`meshcorr.selection`, where each energy is defined and cited),
+        one dict each: ``origin`` ("spectral", "extremities-r", "landmarks",
+        "repaired-..."; with ``partial``: "whole-to-whole", ...),
+        ``orientation`` (area fraction kept in orientation, after the smooth
+        shells for a shelled map), ``distortion`` (metric distortion),
+        ``curvature`` (curvature disagreement), ``regional_orientation``
+        (worst region's orientation), ``landmark_error`` and ``landmarks_kept``
+        (NaN without landmarks), ``energy`` (the value the choice minimises:
+        distortion x curvature^3, times the reversed area fractions before and
+        after the shells for a shelled map; only maps that keep the most
+        landmarks and, with a reliable orientation, have orientation >= 0.6
+        compete), ``chosen`` / ``alternative``, and where they apply
+        ``extremity_energy`` (the tip assignment's cost), ``shells`` (1: the
+        map was refined by the smooth shells) and ``zoomout_orientation``
+        (its orientation before them). Empty when that stage did not run
+        (``symmetry="cost"`` or ``"mirror"``, ``extremities=False`` without
+        landmarks).
     partial : {None, "source", "target"}
         Which shape was declared a part of the other (:mod:`meshcorr.partial`);
         None for a whole-to-whole map.

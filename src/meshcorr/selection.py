@@ -224,6 +224,20 @@ def choose_map(candidates: list[MapCandidate], *, reliable: bool
     return chosen, alternative
 
 
+def candidate_summaries(candidates: list[MapCandidate], chosen: MapCandidate,
+                        alternative: MapCandidate | None, *, reliable: bool) -> list[dict]:
+    """Every candidate's scores for ``--json`` and ``result.map_candidates``.
+
+    :meth:`MapCandidate.to_dict`, its :func:`energy` (``"energy"``: the rule's
+    value, among the candidates that keep the most landmarks and, with a
+    reliable orientation, whose orientation is at least :data:`ORIENTATION_MIN`),
+    and whether it is the chosen map or the alternative.
+    """
+    # Four significant digits: the energy spans many orders of magnitude (1e-12 to 1e-1).
+    return [dict(c.to_dict(), energy=float(f"{energy(c, reliable):.4g}"), chosen=c is chosen,
+                 alternative=c is alternative) for c in candidates]
+
+
 def energy(candidate: MapCandidate, reliable: bool) -> float:
     """distortion x curvature^3, times the reversed areas before and after the shells for a map they refined.
 

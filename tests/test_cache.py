@@ -11,7 +11,7 @@ import meshcorr
 from meshcorr import datasets as ds
 from meshcorr.cache import ShapeCache, as_cache, default_cache_dir
 from meshcorr.cli import main
-from meshcorr.errors import ParameterError
+from meshcorr.errors import ParameterError, PreparedShapeError
 from meshcorr.prepared import SHAPE_SETTINGS, PreparedShape, load_mesh, prepare
 
 
@@ -51,6 +51,16 @@ def test_the_cache_refuses_a_file_from_other_settings(mesh, tmp_path):
     assert PreparedShape.load(path).settings["random_state"] == 0  # replaced
     path.write_bytes(b"damaged")
     assert cache.get(mesh, SHAPE_SETTINGS, "dense") is None
+    # A file cut short (a full disk, a killed copy) is a damaged zip: prepared again and replaced.
+    complete = cache.prepare(mesh, SHAPE_SETTINGS, "dense")
+    data = path.read_bytes()
+    for damaged in (data[:len(data) // 2], b""):
+        path.write_bytes(damaged)
+        with pytest.raises(PreparedShapeError, match="not a prepared shape written by meshcorr"):
+            PreparedShape.load(path)
+        again = cache.prepare(mesh, SHAPE_SETTINGS, "dense")
+        np.testing.assert_array_equal(again.spectrum.embedding, complete.spectrum.embedding)
+        assert PreparedShape.load(path).digest == complete.digest
 
 
 def _prepare_into(root: str) -> str:
@@ -77,12 +87,16 @@ def test_cache_folder_and_cli(mesh, tmp_path, monkeypatch, capsys):
     assert default_cache_dir() == tmp_path / "xdg" / "meshcorr"
     assert as_cache(True).root == tmp_path / "xdg" / "meshcorr"
     prepare(mesh, cache=str(tmp_path / "c"))
-    (tmp_path / "c" / ".x.npz.abc.tmp").write_bytes(b"left by a killed writer")
+    key = ShapeCache(tmp_path / "c").files()[0].name
+    (tmp_path / "c" / f".{key}.0a1b2c.tmp").write_bytes(b"left by a killed writer")
+    # The user's own files in the folder are neither counted nor removed.
+    (tmp_path / "c" / "my_data.npz").write_bytes(b"mine")
+    (tmp_path / "c" / "notes.tmp").write_bytes(b"mine")
     assert main(["cache", "info", "--dir", str(tmp_path / "c")]) == 0
     assert ": 1 prepared shapes, " in capsys.readouterr().out
     assert main(["cache", "clear", "--dir", str(tmp_path / "c")]) == 0
     assert "removed 1 prepared shapes" in capsys.readouterr().out
-    assert list((tmp_path / "c").iterdir()) == []
+    assert sorted(p.name for p in (tmp_path / "c").iterdir()) == ["my_data.npz", "notes.tmp"]
     assert main(["cache", "info", "--dir", str(tmp_path / "none")]) == 0
     assert ": 0 prepared shapes, 0.0 MiB" in capsys.readouterr().out
 

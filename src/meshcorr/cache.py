@@ -19,6 +19,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 from pathlib import Path
 
 from .errors import ParameterError, PreparedShapeError
@@ -26,6 +27,11 @@ from .mesh import Mesh
 from .prepared import FORMAT_VERSION, PreparedShape, _version, mesh_digest, prepare_mesh
 
 SUFFIX = ".npz"
+#: A cache file's name (the key: 64 hex digits), and a writer's temporary file of one
+#: (:func:`meshcorr.io.atomic_write`: ".NAME.RANDOM.tmp"). Only such files are listed or removed:
+#: a user's own files in the folder are left alone.
+_CACHE_FILE = re.compile(r"[0-9a-f]{64}" + re.escape(SUFFIX))
+_TEMPORARY_FILE = re.compile(r"\.[0-9a-f]{64}" + re.escape(SUFFIX) + r"\.[0-9a-f]+\.tmp")
 
 
 def default_cache_dir() -> Path:
@@ -82,7 +88,7 @@ class ShapeCache:
         """The cache files (complete ones; temporary files of writers under way are not listed)."""
         if not self.root.is_dir():
             return []
-        return sorted(p for p in self.root.iterdir() if p.suffix == SUFFIX and not p.name.startswith("."))
+        return sorted(p for p in self.root.iterdir() if _CACHE_FILE.fullmatch(p.name))
 
     def info(self) -> dict:
         """``{"path": str, "files": int, "bytes": int}``."""
@@ -90,11 +96,12 @@ class ShapeCache:
         return {"path": str(self.root), "files": len(files), "bytes": sum(_size(p) for p in files)}
 
     def clear(self) -> dict:
-        """Remove every cache file and stale temporary file; returns what :meth:`info` said before."""
+        """Remove every cache file and stale temporary file (named as meshcorr names them, nothing else);
+        returns what :meth:`info` said before."""
         before = self.info()
         if self.root.is_dir():
             for path in self.root.iterdir():
-                if path.suffix == SUFFIX or (path.name.startswith(".") and path.name.endswith(".tmp")):
+                if _CACHE_FILE.fullmatch(path.name) or _TEMPORARY_FILE.fullmatch(path.name):
                     path.unlink(missing_ok=True)
         return before
 

@@ -46,6 +46,7 @@ import hashlib
 import io
 import json
 import os
+import zipfile
 from dataclasses import fields
 
 import numpy as np
@@ -216,7 +217,11 @@ class PreparedShape:
             Unreadable, another format or meshcorr version, another mesh or other settings.
         """
         header, arrays = _read(path)
-        prepared = cls._from_arrays(header, arrays)
+        try:
+            prepared = cls._from_arrays(header, arrays)
+        except (KeyError, ValueError, TypeError, IndexError) as exc:  # a header or an array missing or malformed
+            raise PreparedShapeError(f"{path} is damaged ({type(exc).__name__}: {exc}); prepare the mesh again "
+                                     "(meshcorr.prepare) or clear the cache (meshcorr cache clear).") from None
         if mesh is not None:
             other = _closed(as_mesh(mesh, largest_component=prepared.settings["largest_component"]),
                             prepared.settings)
@@ -422,7 +427,7 @@ def _read(path, *, name: str | None = None) -> tuple[dict, dict]:
         version = header["format"]
     except FileNotFoundError:
         raise PreparedShapeError(f"{name} does not exist.") from None
-    except (OSError, ValueError, KeyError, TypeError, UnicodeDecodeError) as exc:
+    except (OSError, ValueError, KeyError, TypeError, UnicodeDecodeError, EOFError, zipfile.BadZipFile) as exc:
         raise PreparedShapeError(f"{name} is not a prepared shape written by meshcorr ({exc}); prepare the "
                                  "mesh again (meshcorr.prepare) or clear the cache (meshcorr cache clear).") from None
     if version != FORMAT_VERSION or header.get("meshcorr") != _version():

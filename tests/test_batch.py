@@ -18,7 +18,7 @@ from meshcorr.collection import all_pairs, batch, map_name, read_pairs, template
 from meshcorr.cli import main
 from meshcorr.consistency import (choose_hub, cycle_errors, invert, sample_triples, shape_dna, spectral_medoid,
                                   through_hub)
-from meshcorr.errors import MeshcorrError, ParameterError
+from meshcorr.errors import ParameterError
 from meshcorr.io import read_map
 
 distributed = pytest.importorskip("distributed", reason="the batch tests need meshcorr[dask] (dask[distributed])")
@@ -260,6 +260,8 @@ def test_batch_checks_its_input_before_any_work(shapes, tmp_path):
             batch(all_pairs(paths[:2]), tmp_path, **options)
     with pytest.raises(ParameterError, match="has no pairs"):
         batch([], tmp_path)
+    with pytest.raises(ParameterError, match="give absolute paths"):  # a cluster's workers run elsewhere
+        batch([("shapes/a.off", "/abs/b.off")], tmp_path, client=object())
     with pytest.raises(ParameterError, match=r"same map file c0__c1\.\w+ \(.*c0.off -> .*c1.off and .*c0.off -> "
                                              r".*x/c1.off\)"):
         batch([(paths[0], paths[1]), (paths[0], str(tmp_path / "x" / "c1.off"))], tmp_path)
@@ -290,8 +292,24 @@ def test_cli_usage_errors(shapes, tmp_path, capsys, monkeypatch):
     assert main(["batch", "--template", paths[0], paths[1], "--consistency", "--out", str(tmp_path)]) == 2
     assert "--consistency needs --all-pairs" in capsys.readouterr().err
     assert main(["batch", "--all-pairs", *paths[:2], "--out", str(tmp_path), "--scheduler",
-                 "tcp://127.0.0.1:9"]) == 1
+                 "tcp://127.0.0.1:9"]) == 2
     assert "No Dask scheduler answered at tcp://127.0.0.1:9" in capsys.readouterr().err
+    # Refused before any work: --set for an option with a flag, too few shapes for cycles, no workers,
+    # an output folder that cannot be made, a damaged run.json.
+    assert main(["batch", "--all-pairs", *paths[:2], "--out", str(tmp_path), "--set", "k=8"]) == 2
+    assert "--set k=8: k has its own option here, -k." in capsys.readouterr().err
+    assert main(["batch", "--all-pairs", *paths[:2], "--consistency", "--out", str(tmp_path)]) == 2
+    assert "--consistency needs at least three shapes" in capsys.readouterr().err
+    assert main(["batch", "--all-pairs", *paths[:2], "--workers", "-3", "--out", str(tmp_path)]) == 2
+    assert "whole number >= 1 (--workers N); got -3" in capsys.readouterr().err
+    (tmp_path / "a_file").write_text("x")
+    assert main(["batch", "--all-pairs", *paths[:2], "--out", str(tmp_path / "a_file")]) == 2
+    assert "Cannot create the output folder" in capsys.readouterr().err
+    (tmp_path / "old").mkdir()
+    (tmp_path / "old" / "run.json").write_text("{damaged")
+    assert main(["batch", "--all-pairs", *paths[:2], "--out", str(tmp_path / "old")]) == 3
+    assert "run.json is damaged (not JSON)" in capsys.readouterr().err
+    assert not (tmp_path / "old" / "summary.json").exists()
 
 
 def test_without_dask_the_batch_names_the_extra(shapes, tmp_path, monkeypatch, capsys):
@@ -304,9 +322,9 @@ def test_without_dask_the_batch_names_the_extra(shapes, tmp_path, monkeypatch, c
 
     monkeypatch.setattr(builtins, "__import__", no_dask)
     paths, _ = shapes
-    with pytest.raises(MeshcorrError, match=r'pip install "meshcorr\[dask\]"'):
+    with pytest.raises(ParameterError, match=r'pip install "meshcorr\[dask\]"'):
         batch(all_pairs(paths[:2]), tmp_path)
-    assert main(["batch", "--all-pairs", *paths[:2], "--out", str(tmp_path)]) == 1
+    assert main(["batch", "--all-pairs", *paths[:2], "--out", str(tmp_path)]) == 2
     assert 'meshcorr[dask]' in capsys.readouterr().err
 
 
@@ -360,6 +378,20 @@ def test_consistency_error_paths(shapes, tmp_path):
     records = [{"source": paths[0], "target": paths[1], "status": "failed", "map": ""}]
     with pytest.raises(ParameterError, match="needs three shapes whose maps all succeeded"):
         consistency_report(tmp_path, paths[:3], records)
+    # A shape whose pairs all failed (a damaged mesh) is left out of the report, not read again.
+    broken = tmp_path / "broken.off"
+    broken.write_text("OFF\n3 1 0\n0 0")
+    records = []
+    for a in paths[:3] + [str(broken)]:
+        for b in paths[:3] + [str(broken)]:
+            if a != b:
+                ok = str(broken) not in (a, b)
+                name = tmp_path / f"{Path(a).stem}__{Path(b).stem}.txt"
+                if ok:
+                    np.savetxt(name, np.arange(500), fmt="%d")
+                records.append({"source": a, "target": b, "status": "ok" if ok else "failed", "map": str(name)})
+    report = consistency_report(tmp_path, paths[:3] + [str(broken)], records)
+    assert report["n_triples"] > 0 and "broken" not in {s for t in report["triples"] for s in t}
 
 
 def test_a_damaged_summary_and_a_partial_target_are_reported(shapes, tmp_path):

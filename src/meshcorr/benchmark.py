@@ -26,7 +26,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ._params import check_int
-from .errors import MeshcorrError, ParameterError
+from .errors import InputError, MeshcorrError, ParameterError
 from .evaluation import THRESHOLDS, GeodesicCache, cumulative_curve, evaluate_map
 from .ground_truth import load_ground_truth
 from .io import atomic_write
@@ -217,7 +217,11 @@ def _check_run_settings(out: Path, settings: dict) -> None:
     """Refuse to mix results made with different settings in one folder."""
     path = out / "run.json"
     if path.is_file():
-        previous = json.loads(path.read_text())
+        try:
+            previous = json.loads(path.read_text())
+        except (ValueError, UnicodeDecodeError):
+            raise InputError(f"{path} is damaged (not JSON): delete it to run again with the current "
+                             "settings, or use another --out folder.") from None
         if previous != settings:
             raise ParameterError(
                 f"{out} holds results made with other settings ({previous}); this run uses "

@@ -55,7 +55,7 @@ import numpy as np
 
 from ._threads import single_blas_thread
 from .benchmark import _check_run_settings, _one_line
-from .errors import MeshcorrError, ParameterError
+from .errors import MeshcorrError, OutputError, ParameterError
 from .io import atomic_write
 from .modes import SCALABLE_ABOVE
 from .holes import fills, unfilled
@@ -176,12 +176,14 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
 
     Raises
     ------
-    MeshcorrError
-        Dask is not installed (:data:`DASK_MISSING`).
     ParameterError
-        Bad options (checked before any work), two pairs writing the same
-        map file, an output folder holding results of other settings, or a
-        ``hub`` that is not one of the shapes of every ordered pair.
+        Dask is not installed (:data:`DASK_MISSING`), bad options (checked
+        before any work: also ``n_workers`` < 1, and relative paths with a
+        ``client``, whose workers may run elsewhere), two pairs writing the
+        same map file, an output folder holding results of other settings,
+        or a ``hub`` that is not one of the shapes of every ordered pair.
+    OutputError
+        The output folder cannot be created.
     """
     distributed = _import_distributed()
     settings, options = _split_options(options)
@@ -199,8 +201,22 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
         raise ParameterError(f"The ground truth must be 'identity' or a folder of SHAPE.vts files. "
                              f"Got {ground_truth!r}, which is not a folder.")
     hub = None if hub is None else _check_hub(hub, pairs, options)
+    if n_workers is not None and (isinstance(n_workers, bool) or not isinstance(n_workers, int) or n_workers < 1):
+        raise ParameterError(f"The number of worker processes must be a whole number >= 1 (--workers N); got "
+                             f"{n_workers!r}.")
+    if client is not None:  # its workers may run in other folders, or on other machines
+        relative = [p for pair in pairs for p in pair if not os.path.isabs(p)] + \
+            ([] if os.path.isabs(str(out_dir)) else [str(out_dir)])
+        if relative:
+            raise ParameterError(f"On an existing Dask cluster (--scheduler) the workers open the files by the "
+                                 f"paths given, from their own working folders: give absolute paths (e.g. "
+                                 f"{os.path.abspath(relative[0])} for {relative[0]}).")
     out = Path(out_dir)
-    (out / "maps").mkdir(parents=True, exist_ok=True)
+    try:
+        (out / "maps").mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OutputError(f"Cannot create the output folder {out / 'maps'} ({exc.strerror or exc}): give "
+                          "--out a folder that can be written.") from None
     cache_root = None if cache is None else str(_cache_root(cache))
     run = {"settings": settings, "options": _jsonable(options)}
     _check_run_settings(out, run if hub is None else dict(run, hub=hub))  # old folders have no "hub"
@@ -336,7 +352,7 @@ def _import_distributed():
     try:
         import distributed
     except ImportError:
-        raise MeshcorrError(DASK_MISSING) from None
+        raise ParameterError(DASK_MISSING) from None
     return distributed
 
 
@@ -594,13 +610,13 @@ def connect(address: str):
 
     Raises
     ------
-    MeshcorrError
+    ParameterError
         Dask is missing, or no scheduler answers at ``address`` within :data:`CONNECT_TIMEOUT` seconds.
     """
     distributed = _import_distributed()
     try:
         return distributed.Client(address, timeout=CONNECT_TIMEOUT)
     except (OSError, TimeoutError, ValueError) as exc:
-        raise MeshcorrError(f"No Dask scheduler answered at {address} ({_one_line(exc)}): start one with "
+        raise ParameterError(f"No Dask scheduler answered at {address} ({_one_line(exc)}): start one with "
                             "'dask scheduler' and workers with 'dask worker ADDRESS', or omit --scheduler "
                             "to use a local cluster.") from None

@@ -263,7 +263,8 @@ def consistency_report(out_dir, shapes: Sequence[str], records: Sequence[dict], 
     shapes : sequence of str
         The mesh files of ``--all-pairs``.
     records : sequence of dict
-        The batch's records (failed pairs are left out).
+        The batch's records (failed pairs are left out, and the shapes of no
+        mapped pair).
 
     Returns
     -------
@@ -273,8 +274,11 @@ def consistency_report(out_dir, shapes: Sequence[str], records: Sequence[dict], 
     """
     out = Path(out_dir)
     names = {path: Path(path).stem for path in shapes}
-    meshes = {names[p]: as_mesh(p) for p in shapes}
-    maps = {(names[r["source"]], names[r["target"]]): read_map(r["map"]) for r in records if r["status"] == "ok"}
+    mapped = [r for r in records if r["status"] == "ok"]
+    # Only the shapes of some mapped pair: a shape whose every pair failed (a bad mesh) is left out.
+    used = {path for r in mapped for path in (r["source"], r["target"])}
+    meshes = {names[p]: as_mesh(p) for p in shapes if p in used}
+    maps = {(names[r["source"]], names[r["target"]]): read_map(r["map"]) for r in mapped}
     triples = sample_triples(list(meshes), maps, n_triples, random_state)
     if not triples:
         raise ParameterError("The cycle-consistency error needs three shapes whose maps all succeeded.")

@@ -45,7 +45,7 @@ exit codes:
   {EXIT_USAGE}    bad usage: unknown flag, bad option value, an output that cannot be written
   {EXIT_INPUT}    bad input data: a mesh, map or ground-truth file that cannot be used
   {EXIT_FAILED_RUNS}    bench, batch: some runs failed (recorded in their results)
-  {EXIT_INTERRUPTED}  interrupted (Ctrl-C); no output file is written
+  {EXIT_INTERRUPTED}  interrupted (Ctrl-C); no output file is written (batch keeps the maps it finished)
   {EXIT_BROKEN_PIPE}  stdout was closed early (e.g. piped into head)
 """
 

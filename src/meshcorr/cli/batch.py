@@ -17,7 +17,7 @@ embedding, orientation, curvature and refinement basis), as a Dask graph: one
 task per shape, one per pair. By default a local cluster of one worker process
 per core is started and stopped; --scheduler tcp://HOST:PORT runs the same
 graph on an existing Dask cluster (its workers must see the mesh files and
---out at the same paths). Needs meshcorr[dask].
+--out at the same absolute paths). Needs meshcorr[dask].
 
 Pairs: --pairs FILE (one "SOURCE TARGET" a line), --all-pairs SHAPES... (every
 ordered pair, n(n-1) maps) or --template T SHAPES... (T onto each shape: every
@@ -57,7 +57,8 @@ def add_parser(sub) -> None:
     p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                    help="an existing Dask scheduler (default: a local cluster started here)")
     p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="worker processes of the local cluster (default: one per core)")
+                   help="worker processes of the local cluster, >= 1 (default: one per core; not used "
+                        "with --scheduler)")
     p.add_argument("--cache", metavar="DIR", nargs="?", const=True, default=None,
                    help="keep prepared shapes in this on-disk cache (no DIR: the default cache, "
                         "see 'meshcorr cache info')")
@@ -101,6 +102,9 @@ def _pairs(args) -> list[tuple[str, str]]:
                              "list them after --all-pairs, with --pairs put them in the file.")
     if args.consistency and not args.all_pairs:
         raise ParameterError("--consistency needs --all-pairs (it compares the maps of every ordered pair).")
+    if args.consistency and len(set(args.all_pairs)) < 3:
+        raise ParameterError("--consistency needs at least three shapes (it follows maps round triples "
+                             f"A -> B -> C -> A); got {len(set(args.all_pairs))}.")
     if args.hub and not args.all_pairs:
         raise ParameterError("--hub needs --all-pairs (it composes the maps between every two shapes through "
                              "the hub); with --template T, T is the hub already.")
@@ -109,6 +113,14 @@ def _pairs(args) -> list[tuple[str, str]]:
     if args.all_pairs:
         return all_pairs(args.all_pairs)
     return template_pairs(args.template, args.shapes)
+
+
+#: Options of meshcorr.match that have a flag of their own here: --set must not give them
+#: (the flag's default would silently win).
+FLAGGED = {"k": "-k", "geodesic": "--geodesic", "random_state": "--seed", "refine": "--refine / --no-refine",
+           "shells": "--shells / --no-shells", "mode": "--mode", "n_samples": "--samples",
+           "oriented_starts": "--oriented-starts", "partial": "--partial",
+           "fill_holes": "--fill-holes / --no-fill-holes"}
 
 
 def _options(items: list[str]) -> dict:
@@ -120,6 +132,8 @@ def _options(items: list[str]) -> dict:
         key, eq, value = item.partition("=")
         if not eq or not key:
             raise ParameterError(f"--set takes KEY=VALUE, e.g. symmetry=cost; got {item!r}.")
+        if key.strip() in FLAGGED:
+            raise ParameterError(f"--set {item}: {key.strip()} has its own option here, {FLAGGED[key.strip()]}.")
         options[key.strip()] = _value(value)
     return options
 

@@ -249,6 +249,31 @@ def test_an_interrupted_batch_resumes(cluster, shapes, tmp_path):
         batch(pairs, tmp_path, client=cluster, random_state=1)
 
 
+def test_a_rerun_redoes_the_pairs_of_a_changed_mesh_and_keeps_the_others_records(cluster, shapes, tmp_path):
+    import shutil
+
+    paths, _ = shapes
+    local = []
+    for path in paths[:3]:  # copies: one of them is changed below
+        local.append(str(tmp_path / Path(path).name))
+        shutil.copy(path, local[-1])
+    pairs = template_pairs(local[0], local)
+    out = tmp_path / "out"
+    batch(pairs, out, client=cluster)
+    # A run of one pair into the same folder keeps the other pairs' records.
+    batch(pairs[:1], out, client=cluster)
+    assert len(json.loads((out / "summary.json").read_text())["pairs"]) == 2
+    # The third shape's file now holds another pose: its pair is matched again, the other not.
+    shutil.copy(paths[1], local[2])
+    totals = []
+    records = batch(pairs, out, client=cluster, progress=lambda d, t, f, s: totals.append(t))
+    assert totals[0] == 1 and [r["status"] for r in records] == ["ok", "ok"]
+    np.testing.assert_array_equal(read_map(records[1]["map"]), meshcorr.match(local[0], local[2]).map)
+    # Scoring asked for on a finished folder scores (the pairs run again with the truth).
+    records = batch(pairs, out, client=cluster, ground_truth="identity")
+    assert all(r["mean_error"] is not None for r in records)
+
+
 def test_batch_checks_its_input_before_any_work(shapes, tmp_path):
     paths, _ = shapes
     for options, message in [({"k": 1}, "'k' parameter must be an int >= 2"),

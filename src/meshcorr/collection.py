@@ -221,8 +221,17 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
     run = {"settings": settings, "options": _jsonable(options)}
     _check_run_settings(out, run if hub is None else dict(run, hub=hub))  # old folders have no "hub"
     records = {(r["source"], r["target"]): r for r in _read_summary(out)}
-    todo = [(a, b) for a, b in pairs
-            if not (records.get((a, b), {}).get("status") == DONE and (out / "maps" / map_name(a, b)).is_file())]
+
+    def inputs(a: str, b: str) -> str:
+        """What a pair's map was made from: both files (path, size, modification time), the options, the truth."""
+        return _task_key(a + chr(0) + b, settings, options, ground_truth)
+
+    def done_before(a: str, b: str) -> bool:
+        record = records.get((a, b), {})
+        return (record.get("status") == DONE and (out / "maps" / map_name(a, b)).is_file()
+                and record.get("inputs", inputs(a, b)) == inputs(a, b))  # a changed mesh or --gt: again
+
+    todo = [(a, b) for a, b in pairs if not done_before(a, b)]
 
     try:
         with _client(distributed, client, n_workers) as dask_client:
@@ -272,17 +281,24 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
                 except Exception as exc:  # noqa: BLE001 - e.g. KilledWorker: the pair crashed its worker
                     record = dict(_record(*futures[future], hub), error=_one_line(exc))
                 future.release()
+                record["inputs"] = inputs(record["source"], record["target"])
                 records[(record["source"], record["target"])] = record
                 done, failed = done + 1, failed + (record["status"] != DONE)
                 eta.finished(record["made"] == "match")
                 if time.perf_counter() - written > SUMMARY_EVERY:  # a rerun redoes the pairs not yet written
-                    _write_summary(out, [records[p] for p in pairs if p in records])
+                    _write_summary(out, _in_order(records, pairs))
                     written = time.perf_counter()
                 if progress is not None:
                     progress(done, len(todo), failed, eta.seconds_left())
     finally:  # after an interruption too: a rerun skips what is recorded
-        _write_summary(out, [records[p] for p in pairs if p in records])
+        _write_summary(out, _in_order(records, pairs))
     return [records[p] for p in pairs]
+
+
+def _in_order(records: dict, pairs: list[tuple[str, str]]) -> list[dict]:
+    """This run's records in its order, then those of earlier runs into the folder for other pairs (kept)."""
+    wanted = set(pairs)
+    return [records[p] for p in pairs if p in records] + [r for p, r in records.items() if p not in wanted]
 
 
 class _Estimate:

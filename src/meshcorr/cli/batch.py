@@ -26,7 +26,8 @@ map is indexed by T's vertices).
 --out DIR receives maps/SOURCE__TARGET.txt (line i: the TARGET vertex of SOURCE
 vertex i) as each pair finishes, summary.json and summary.csv (per pair:
 status, seconds, the error with --gt) and run.json (the settings). A rerun
-with the same --out skips the pairs done; a failed pair (e.g. a bad mesh) is
+with the same --out skips the pairs done (not those whose mesh files changed
+or whose --gt differs); a failed pair (e.g. a bad mesh) is
 recorded and the others go on. Exit code: 0 if every pair was mapped, 4 if
 any failed. With --all-pairs, --consistency also reports the cycle-consistency
 error and writes maps made consistent through the collection (see

@@ -451,6 +451,26 @@ def test_cli_batch_cache_and_ctrl_c(cluster, shapes, tmp_path, monkeypatch, caps
     assert "interrupted" in capsys.readouterr().err
 
 
+def test_ctrl_c_in_a_terminal_stops_the_local_cluster_without_worker_tracebacks(shapes, tmp_path):
+    # A terminal sends SIGINT to the whole process group: the worker processes too.
+    import os
+    import signal
+    import subprocess
+    import sys
+
+    paths, _ = shapes
+    run = subprocess.Popen([sys.executable, "-m", "meshcorr", "batch", "--all-pairs", *paths,
+                            "--out", str(tmp_path / "out"), "--workers", "2"],
+                           stderr=subprocess.PIPE, text=True, start_new_session=True)
+    for line in run.stderr:  # the first progress line: the cluster runs and the pairs are submitted
+        if line.startswith("[batch]"):
+            break
+    os.killpg(run.pid, signal.SIGINT)
+    rest = run.stderr.read()
+    assert run.wait(timeout=60) == 130
+    assert "Traceback" not in rest and rest.strip().splitlines()[-1] == "meshcorr: interrupted", rest
+
+
 class _CrashingClient:
     """A stand-in client whose pair tasks fail in the scheduler (as when a pair kills its worker)."""
 

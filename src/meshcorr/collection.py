@@ -46,6 +46,8 @@ import io
 import json
 import logging
 import os
+import signal
+import threading
 import time
 from contextlib import contextmanager
 from pathlib import Path
@@ -384,10 +386,32 @@ def _client(distributed, client, n_workers: int | None):
     env = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
                                   "MESHCORR_THREADS")}
     # silence_logs: Dask's own warnings (e.g. the tasks cancelled by Ctrl-C) are not the user's business.
-    with distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                                  dashboard_address=None, env=env, silence_logs=logging.ERROR) as cluster, \
-            distributed.Client(cluster) as local:
+    with _workers_ignore_ctrl_c():
+        cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                           host="127.0.0.1", dashboard_address=None, env=env,
+                                           silence_logs=logging.ERROR)
+    with cluster, distributed.Client(cluster) as local:
         yield local
+
+
+@contextmanager
+def _workers_ignore_ctrl_c():
+    """SIGINT ignored while the local cluster starts its worker processes, which inherit that.
+
+    Ctrl-C in a terminal goes to the whole process group: the workers got it too and each printed
+    a traceback before this process could stop them. Ignored signals (not handlers) survive the
+    workers' spawn; this process restores its own handler at once and stops the workers itself.
+    An interrupt while the cluster starts is lost (press Ctrl-C again). Outside the main thread
+    (where signals cannot be set) the cluster starts as it is.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _split_options(options: dict) -> tuple[dict, dict]:

@@ -386,9 +386,11 @@ def _client(distributed, client, n_workers: int | None):
     env = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
                                   "MESHCORR_THREADS")}
     # silence_logs: Dask's own warnings (e.g. the tasks cancelled by Ctrl-C) are not the user's business.
+    # dashboard_address ":0": the scheduler's HTTP server on a free port (None still asked for 8787 and
+    # warned "Port 8787 is already in use" beside another Dask cluster).
     with _workers_ignore_ctrl_c():
         cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                           host="127.0.0.1", dashboard_address=None, env=env,
+                                           host="127.0.0.1", dashboard_address=":0", env=env,
                                            silence_logs=logging.ERROR)
     with cluster, distributed.Client(cluster) as local:
         yield local

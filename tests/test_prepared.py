@@ -70,6 +70,9 @@ def test_load_refuses_another_mesh_other_settings_and_other_versions(pair, tmp_p
         PreparedShape.load(path, mesh=pair[1])
     with pytest.raises(PreparedShapeError, match=r"other settings: k=6 \(asked: 5\)"):
         PreparedShape.load(path, settings=dict(SHAPE_SETTINGS, k=5))
+    with pytest.raises(PreparedShapeError, match=r"other settings: k=6 \(asked: 8\)"):  # some settings only
+        PreparedShape.load(path, settings={"k": 8})
+    assert PreparedShape.load(path, settings={"k": 6}).settings["k"] == 6
     # Another format version: rewrite the header.
     with np.load(path, allow_pickle=False) as data:
         arrays = {name: data[name] for name in data.files}

@@ -138,7 +138,7 @@ class PreparedShape:
         return mesh_digest(self.mesh)
 
     def check(self, settings: dict, mode: str | None = None, *, role: str = "shape") -> None:
-        """Refuse settings (or a ``mode``) other than those it was made for.
+        """Refuse settings (or a ``mode``) other than those it was made for (those given: some may be left out).
 
         Raises
         ------
@@ -152,7 +152,7 @@ class PreparedShape:
                   for key in sorted(wanted) if self.settings.get(key) != wanted[key]]
         if differ:
             holes = (" (partial matching and one-to-one maps keep the holes: prepare with fill_holes=False)"
-                     if self.settings.get("fill_holes") and not wanted["fill_holes"] else "")
+                     if self.settings.get("fill_holes") and not wanted.get("fill_holes", True) else "")
             raise PreparedShapeError(
                 f"The prepared {role} {self.mesh.name!r} was made with other settings: {', '.join(differ)}. "
                 f"Prepare it again with these settings (meshcorr.prepare){holes} or match with the settings "

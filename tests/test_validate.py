@@ -236,7 +236,8 @@ def test_largest_component_on_connected_mesh_is_identity():
 
 def test_too_few_vertices_with_reason():
     reason = "the spectral embedding with k=6 needs at least 7 vertices"
-    with pytest.raises(MeshError, match=r"mesh has 6 vertices but at least 7 are needed \(the spectral embedding with k=6 needs at least 7 vertices\)"):
+    with pytest.raises(MeshError, match=r"mesh has 6 vertices but at least 7 are needed: the spectral embedding "
+                                        r"with k=6 needs at least 7 vertices\. Use a finer mesh"):
         validate_mesh(OCTA_V, OCTA_F, min_vertices=7, reason=reason)
 
 

@@ -125,21 +125,22 @@ def index_fields(line: str) -> list[int] | None:
     return [int(f) for f in fields]
 
 
-def _read_lines(path: Path) -> list[tuple[int, str]]:
-    lines = read_index_lines(path)
+def _read_lines(path: Path, kind: str = "ground-truth") -> list[tuple[int, str]]:
+    lines = read_index_lines(path, kind)
     if not lines:
-        raise InputError(f"{path}: the ground-truth file is empty.")
+        raise InputError(f"{path}: the {kind} file is empty.")
     return lines
 
 
-def read_vts_lines(path) -> tuple[np.ndarray, np.ndarray]:
+def read_vts_lines(path, kind: str = "ground-truth") -> tuple[np.ndarray, np.ndarray]:
     """A ``.vts`` file's indices made 0-based as they stand (unchecked), and each one's line number, 1-based.
 
-    For messages that name a line (:func:`read_vts` checks the range).
+    For messages that name a line (:func:`read_vts` checks the range); ``kind`` names the file's
+    use in them ("ground-truth", "landmark").
     """
     path = Path(path)
     values, numbers = [], []
-    for number, line in _read_lines(path):
+    for number, line in _read_lines(path, kind):
         if not re.fullmatch(r"[+-]?\d{1,18}", line):  # 18 digits: always an int64
             raise InputError(f"{path}, line {number}: a .vts file holds one integer per line; "
                              f"got {line[:40]!r}.")

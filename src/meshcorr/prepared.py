@@ -316,7 +316,7 @@ def load_mesh(shape: MeshLike, settings: dict, *, name: str | None) -> Mesh:
     """
     k = settings["k"]
     mesh = as_mesh(shape, name=name, largest_component=settings["largest_component"], min_vertices=k + 2,
-                   reason=f"The spectral embedding with k={k} needs at least {k + 2} vertices.")
+                   reason=f"the spectral embedding with k={k} (-k) needs k + 2 vertices")
     return _closed(mesh, settings)
 
 

@@ -361,7 +361,7 @@ def validate_mesh(
     _check_manifold(faces, len(vertices), name)
     vertices, faces, kept = _select_component(vertices, faces, largest_component, name)
     if len(vertices) < min_vertices:
-        why = f" ({reason})" if reason else ""
+        why = f": {reason.rstrip('.')}" if reason else ""
         raise MeshError(
             f"{name} has {len(vertices)} vertices but at least {min_vertices} are "
             f"needed{why}. Use a finer mesh or lower the parameter that needs them."

@@ -290,7 +290,7 @@ def _read_landmarks(args):
 
         from ..ground_truth import read_vts_lines
 
-        (a, lines_a), (b, lines_b) = (read_vts_lines(path) for path in args.landmarks_vts)
+        (a, lines_a), (b, lines_b) = (read_vts_lines(path, "landmark") for path in args.landmarks_vts)
         if len(a) != len(b):
             raise ParameterError(f"--landmarks-vts: {args.landmarks_vts[0]} has {len(a)} lines and "
                                  f"{args.landmarks_vts[1]} has {len(b)}; line k of each must be landmark k.")

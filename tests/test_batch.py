@@ -327,6 +327,13 @@ def test_cli_usage_errors(shapes, tmp_path, capsys, monkeypatch):
     assert "--consistency needs at least three shapes" in capsys.readouterr().err
     assert main(["batch", "--all-pairs", *paths[:2], "--workers", "-3", "--out", str(tmp_path)]) == 2
     assert "whole number >= 1 (--workers N); got -3" in capsys.readouterr().err
+    assert main(["batch", "--all-pairs", *paths[:2], "--workers", "2", "--scheduler", "tcp://127.0.0.1:9",
+                 "--out", str(tmp_path)]) == 2
+    assert "leave out one of them" in capsys.readouterr().err
+    assert main(["batch", "--template", paths[0], "--cache", *paths[1:3], "--out", str(tmp_path)]) == 2
+    assert f"--cache took {paths[1]} as its folder" in capsys.readouterr().err
+    assert main(["batch", "--template", paths[0], "--out", str(tmp_path)]) == 2
+    assert "No mesh files were given: list at least 1 (after --template T)" in capsys.readouterr().err
     (tmp_path / "a_file").write_text("x")
     assert main(["batch", "--all-pairs", *paths[:2], "--out", str(tmp_path / "a_file")]) == 2
     assert "Cannot create the output folder" in capsys.readouterr().err

@@ -15,7 +15,7 @@ from importlib import import_module
 
 from ._version import __version__
 from .errors import (InputError, LandmarkError, MeshError, MeshWarning, MeshcorrError, ParameterError,
-                     PartialityError, PartialShapeWarning)
+                     PartialityError, PartialShapeWarning, PreparedShapeError)
 
 #: Public name -> (module, attribute); attribute None for a public submodule.
 _LAZY = {
@@ -34,7 +34,7 @@ _LAZY = {
 
 __all__ = ["match", "Matcher", "Settings", "prepare", "PreparedShape", "batch", "Correspondence", "Mesh",
            "as_mesh", "MeshError", "MeshWarning", "MeshcorrError", "ParameterError", "InputError", "LandmarkError",
-           "PartialityError", "PartialShapeWarning", "datasets", "evaluation",
+           "PartialityError", "PartialShapeWarning", "PreparedShapeError", "datasets", "evaluation",
            "fmap", "precise", "progress", "transfer", "viz", "__version__"]
 
 

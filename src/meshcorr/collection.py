@@ -121,8 +121,12 @@ def template_pairs(template: str, shapes: Sequence[str]) -> list[tuple[str, str]
 
 
 def _check_shapes(shapes: Sequence[str], minimum: int) -> None:
+    if not shapes:
+        raise ParameterError(f"No mesh files were given: list at least {minimum} "
+                             f"({'after --all-pairs' if minimum > 1 else 'after --template T'}).")
     if len(set(shapes)) < minimum or len(set(shapes)) != len(shapes):
-        raise ParameterError(f"Give at least {minimum} distinct mesh files (each once). Got {list(shapes)}.")
+        raise ParameterError(f"Give at least {minimum} distinct mesh file{'s' if minimum > 1 else ''} (each "
+                             f"once). Got {list(shapes)}.")
 
 
 def map_name(source: str, target: str) -> str:

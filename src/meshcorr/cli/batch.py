@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 
@@ -106,6 +107,12 @@ def _pairs(args) -> list[tuple[str, str]]:
     if args.consistency and len(set(args.all_pairs)) < 3:
         raise ParameterError("--consistency needs at least three shapes (it follows maps round triples "
                              f"A -> B -> C -> A); got {len(set(args.all_pairs))}.")
+    if args.workers is not None and args.scheduler:
+        raise ParameterError("--workers sets the local cluster's size; with --scheduler the cluster's own "
+                             "workers run the batch: leave out one of them.")
+    if isinstance(args.cache, str) and os.path.isfile(args.cache):
+        raise ParameterError(f"--cache took {args.cache} as its folder: write --cache=DIR, or put --cache (the "
+                             "default folder) after the mesh files.")
     if args.hub and not args.all_pairs:
         raise ParameterError("--hub needs --all-pairs (it composes the maps between every two shapes through "
                              "the hub); with --template T, T is the hub already.")

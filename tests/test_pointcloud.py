@@ -191,7 +191,7 @@ def test_an_open_cloud_has_an_unreliable_orientation_and_the_match_says_so():
     cap = points[points[:, 2] > 0.0]
     assert not mesh_orientation(as_mesh(cap)).reliable
     assert "open" in mesh_orientation(as_mesh(cap)).reason
-    with pytest.warns(MeshWarning, match="orientation cannot be checked: the point cloud is open"):
+    with pytest.warns(MeshWarning, match="orientation cannot be checked: source: the point cloud is open"):
         result = meshcorr.match(cap, cap * 2.0, refine=False)
     assert not result.orientation_reliable
 

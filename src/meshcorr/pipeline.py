@@ -292,7 +292,8 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         candidates = _score_candidates(src, tgt, spectra, configurations, timer, options, reliable=reliable)
         chosen, other = choose(candidates, symmetry, orientation_reliable=reliable)
         if not reliable and symmetry == "auto" and len(candidates) > 1:
-            why = mesh_orientation(src).reason or mesh_orientation(tgt).reason
+            unsure = src if mesh_orientation(src).reason else tgt
+            why = f"{unsure.name}: {mesh_orientation(unsure).reason}"
             warnings.warn(f"The left/right orientation cannot be checked: {why}. The map may be the mirror "
                           "image of the right one; compare it with result.alternative_map.", MeshWarning,
                           stacklevel=2)

@@ -292,6 +292,11 @@ def test_batch_checks_its_input_before_any_work(shapes, tmp_path):
         batch([(paths[0], paths[1]), (paths[0], str(tmp_path / "x" / "c1.off"))], tmp_path)
     with pytest.raises(ParameterError, match="'identity' or a folder of SHAPE.vts"):
         batch(all_pairs(paths[:2]), tmp_path, ground_truth="truth.txt")
+    (tmp_path / "truth").mkdir()
+    (tmp_path / "truth" / "c0.vts").write_text("1\n")
+    with pytest.raises(ParameterError, match="folder .*truth has no c1.vts: every shape needs"):
+        batch(all_pairs(paths[:2]), tmp_path / "out", ground_truth=str(tmp_path / "truth"))
+    assert not (tmp_path / "out").exists()
     with pytest.raises(ParameterError, match="at least 2 distinct mesh files"):
         all_pairs([paths[0], paths[0]])
     assert template_pairs(paths[0], paths[:3]) == [(paths[0], paths[1]), (paths[0], paths[2])]

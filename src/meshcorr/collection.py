@@ -206,6 +206,13 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
     if ground_truth is not None and ground_truth != "identity" and not Path(ground_truth).is_dir():
         raise ParameterError(f"The ground truth must be 'identity' or a folder of SHAPE.vts files. "
                              f"Got {ground_truth!r}, which is not a folder.")
+    if ground_truth is not None and ground_truth != "identity":
+        missing = sorted({Path(p).stem for pair in pairs for p in pair
+                          if not (Path(ground_truth) / f"{Path(p).stem}.vts").is_file()})
+        if missing:
+            raise ParameterError(f"The ground-truth folder {ground_truth} has no {missing[0]}.vts"
+                                 f"{f' (nor {len(missing) - 1} more)' if len(missing) > 1 else ''}: every shape "
+                                 "needs SHAPESTEM.vts there to be scored.")
     hub = None if hub is None else _check_hub(hub, pairs, options)
     if n_workers is not None and (isinstance(n_workers, bool) or not isinstance(n_workers, int) or n_workers < 1):
         raise ParameterError(f"The number of worker processes must be a whole number >= 1 (--workers N); got "

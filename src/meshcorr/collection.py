@@ -396,13 +396,15 @@ def _client(distributed, client, n_workers: int | None):
     # (meshcorr._threads; the maps are those of the threaded runs).
     env = {name: "1" for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
                                   "MESHCORR_THREADS")}
-    # silence_logs: Dask's own warnings (e.g. the tasks cancelled by Ctrl-C) are not the user's business.
+    # silence_logs: Dask's own warnings and errors (the tasks cancelled by Ctrl-C, a worker's heartbeat to
+    # the scheduler that an interrupt stopped first) are not the user's business; a pair's failure comes
+    # back through its future and is recorded.
     # dashboard_address ":0": the scheduler's HTTP server on a free port (None still asked for 8787 and
     # warned "Port 8787 is already in use" beside another Dask cluster).
     with _workers_ignore_ctrl_c():
         cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                            host="127.0.0.1", dashboard_address=":0", env=env,
-                                           silence_logs=logging.ERROR)
+                                           silence_logs=logging.CRITICAL)
     with cluster, distributed.Client(cluster) as local:
         yield local
 

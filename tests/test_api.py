@@ -255,3 +255,23 @@ def test_matcher_takes_prepared_shapes(shape, copy_and_truth, result):
     again = Matcher(refine=False).fit(*prepared)
     np.testing.assert_array_equal(again.map, result.map)
     assert again.target is not None and again.evaluate(copy_and_truth[1])["mean_error"] < 1e-9
+
+
+@pytest.mark.parametrize("options, message", [
+    ({"random_state": -1}, "'random_state' parameter must be an int >= 0. Got -1"),
+    ({"random_state": 1.5, "method": "icp"}, "'random_state' parameter must be an int. Got 1.5"),
+    ({"anchor_weight": float("inf")}, "'anchor_weight' parameter must be a finite real number"),
+    ({"shells": "no"}, "'shells' parameter must be True or False. Got 'no'"),
+    ({"bijective": "yes"}, "'bijective' parameter must be True or False"),
+    ({"extremities": None}, "'extremities' parameter must be True or False"),
+])
+def test_bad_options_are_refused_by_name(shape, options, message):
+    # Each used to run: a raw numpy error for the negative seed, a collapsed map for an infinite
+    # weight, any truthy value for a switch.
+    with pytest.raises(ParameterError, match=message):
+        meshcorr.match(shape, shape, **options)
+
+
+def test_the_summary_is_json_with_a_numpy_seed(shape):
+    result = meshcorr.match(shape, shape, random_state=np.int64(3), refine=False)
+    assert json.loads(json.dumps(result.summary()))["params"]["random_state"] == 3

@@ -5,8 +5,11 @@
 
 from __future__ import annotations
 
+import math
 import numbers
 from typing import Sequence
+
+import numpy as np
 
 from .errors import ParameterError
 
@@ -26,8 +29,8 @@ def check_int(name: str, value, *, minimum: int | None = None, maximum: int | No
 def check_float(name: str, value, *, minimum: float | None = None, exclusive: bool = False,
                 maximum: float | None = None) -> float:
     """Return ``value`` as a float or raise :class:`ParameterError`."""
-    if isinstance(value, bool) or not isinstance(value, numbers.Real) or value != value:
-        raise ParameterError(f"The {name!r} parameter must be a real number. Got {value!r} instead.")
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
+        raise ParameterError(f"The {name!r} parameter must be a finite real number. Got {value!r} instead.")
     value = float(value)
     if minimum is not None and (value <= minimum if exclusive else value < minimum):
         op = ">" if exclusive else ">="
@@ -35,6 +38,18 @@ def check_float(name: str, value, *, minimum: float | None = None, exclusive: bo
     if maximum is not None and value > maximum:
         raise ParameterError(f"The {name!r} parameter must be a number <= {maximum}. Got {value} instead.")
     return value
+
+
+def check_bool(name: str, value) -> bool:
+    """Return ``value`` as a bool if it is True or False (numpy's too), or raise :class:`ParameterError`."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise ParameterError(f"The {name!r} parameter must be True or False. Got {value!r} instead.")
+    return bool(value)
+
+
+def check_seed(value) -> int | None:
+    """The ``random_state``: None or an int >= 0 (numpy's seeds), or raise :class:`ParameterError`."""
+    return None if value is None else check_int("random_state", value, minimum=0)
 
 
 def check_choice(name: str, value, choices: Sequence[str]) -> str:

@@ -22,7 +22,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ._params import check_choice, check_float, check_int
+from ._params import check_bool, check_choice, check_float, check_int, check_seed
 from ._threads import parallel_map
 from .anchors import EXACT_PAIRS, anchor_descriptors, embedding_neighbours, proximity_matching, select_anchors
 from .curvature import curvature_disagreement
@@ -225,6 +225,10 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
     check_partial_options(partial, method, changed_options(match, locals()))  # PartialityError
     reject_inapplicable(method, changed_options(match, locals()))  # ParameterError naming unused options
     progress = as_progress(progress)
+    random_state = check_seed(random_state)
+    for name, value in (("bijective", bijective), ("shells", shells), ("extremities", extremities),
+                        ("oriented_starts", oriented_starts), ("prealign", prealign)):
+        check_bool(name, value)
     if check_choice("method", method, METHOD_NAMES) != "spectral":
         common = dict(k=k, geodesic=geodesic, bijective=bijective, largest_component=largest_component)
         source, target = as_meshes(source, target)

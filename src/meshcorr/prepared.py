@@ -52,7 +52,7 @@ from dataclasses import fields
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ._params import check_choice, check_int
+from ._params import check_bool, check_choice, check_int, check_seed
 from .errors import ParameterError, PreparedShapeError
 from .geodesics import GEODESIC_METHODS
 from .holes import fill_holes
@@ -87,11 +87,9 @@ def shape_settings(*, k: int, geodesic: str, scale_eigenvalues: bool, n_samples:
     n_samples = check_int("n_samples", n_samples, minimum=k + 1)
     for name, value in (("scale_eigenvalues", scale_eigenvalues), ("refine", refine),
                         ("largest_component", largest_component), ("fill_holes", fill_holes)):
-        if not isinstance(value, (bool, np.bool_)):
-            raise ParameterError(f"The {name!r} parameter must be True or False. Got {value!r} instead.")
+        check_bool(name, value)
     refine_k = check_int("refine_k", refine_k, minimum=2)
-    if random_state is not None:
-        random_state = check_int("random_state", random_state)
+    random_state = check_seed(random_state)
     return dict(k=k, geodesic=geodesic, scale_eigenvalues=bool(scale_eigenvalues), n_samples=n_samples,
                 refine=bool(refine), refine_k=refine_k, largest_component=bool(largest_component),
                 random_state=random_state, fill_holes=bool(fill_holes))

@@ -12,7 +12,7 @@ import pytest
 import meshcorr
 from meshcorr import Correspondence, Matcher, Settings
 from meshcorr import datasets as ds
-from meshcorr.errors import ParameterError
+from meshcorr.errors import InputError, ParameterError
 from meshcorr.progress import TqdmProgress, as_progress
 
 
@@ -140,6 +140,11 @@ def test_load_rejects_other_files(tmp_path):
     (tmp_path / "text.npz").write_text("hello")
     with pytest.raises(ParameterError, match="not a saved meshcorr result"):
         Correspondence.load(tmp_path / "text.npz")
+    # A map with metadata that is not a result's (was a raw KeyError / JSONDecodeError).
+    for text in ('{"x": 1}', "{damaged"):
+        np.savez(tmp_path / "bad.npz", map=np.arange(3), json=np.frombuffer(text.encode(), dtype=np.uint8))
+        with pytest.raises(InputError, match="not a saved meshcorr result .damaged or from another program"):
+            Correspondence.load(tmp_path / "bad.npz")
 
 
 def test_evaluate_transfer_inverse_compose(result, copy_and_truth, shape):

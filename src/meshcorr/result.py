@@ -473,20 +473,24 @@ class Correspondence:
         arrays = read_npz(path, "a saved meshcorr result")
         if "json" not in arrays or "map" not in arrays:
             raise InputError(f"{path} is not a saved meshcorr result: it lacks the map or its metadata.")
-        rest = json.loads(arrays.pop("json").tobytes().decode())
-        configuration = rest.pop("configuration")
-        to_config = lambda d: Configuration(tuple(d["perm"]), tuple(d["signs"]), d["cost"])  # noqa: E731
-        rest["configuration"] = to_config(configuration) if configuration else None
-        rest["alternatives"] = [to_config(d) for d in rest["alternatives"]]
-        meshes = {}
-        for role in ("source", "target"):
-            if f"{role}_mesh_vertices" in arrays:
-                meshes[role] = Mesh(arrays.pop(f"{role}_mesh_vertices"), arrays.pop(f"{role}_mesh_faces"),
-                                    name=role, kept=arrays.pop(f"{role}_mesh_kept"),
-                                    n_original=int(arrays.pop(f"{role}_mesh_n_original")))
-        eigenvalues = {key[len("eigenvalues_"):]: arrays.pop(key) for key in list(arrays)
-                       if key.startswith("eigenvalues_")}
-        return cls(**arrays, **rest, **meshes, eigenvalues=eigenvalues)
+        try:
+            rest = json.loads(arrays.pop("json").tobytes().decode())
+            configuration = rest.pop("configuration")
+            to_config = lambda d: Configuration(tuple(d["perm"]), tuple(d["signs"]), d["cost"])  # noqa: E731
+            rest["configuration"] = to_config(configuration) if configuration else None
+            rest["alternatives"] = [to_config(d) for d in rest["alternatives"]]
+            meshes = {}
+            for role in ("source", "target"):
+                if f"{role}_mesh_vertices" in arrays:
+                    meshes[role] = Mesh(arrays.pop(f"{role}_mesh_vertices"), arrays.pop(f"{role}_mesh_faces"),
+                                        name=role, kept=arrays.pop(f"{role}_mesh_kept"),
+                                        n_original=int(arrays.pop(f"{role}_mesh_n_original")))
+            eigenvalues = {key[len("eigenvalues_"):]: arrays.pop(key) for key in list(arrays)
+                           if key.startswith("eigenvalues_")}
+            return cls(**arrays, **rest, **meshes, eigenvalues=eigenvalues)
+        except (ValueError, KeyError, TypeError, AttributeError, UnicodeDecodeError) as exc:  # JSONDecodeError too
+            raise InputError(f"{path} is not a saved meshcorr result (damaged or from another program: "
+                             f"{type(exc).__name__}: {exc}). Save the result again.") from None
 
 
 def _json_default(value):

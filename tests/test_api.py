@@ -280,3 +280,32 @@ def test_bad_options_are_refused_by_name(shape, options, message):
 def test_the_summary_is_json_with_a_numpy_seed(shape):
     result = meshcorr.match(shape, shape, random_state=np.int64(3), refine=False)
     assert json.loads(json.dumps(result.summary()))["params"]["random_state"] == 3
+
+
+def test_wrong_values_for_the_result_s_methods_are_refused_by_name(shape):
+    from meshcorr import evaluation
+    from meshcorr.ground_truth import GroundTruth
+
+    result = meshcorr.match(shape, shape, refine=False)
+    n = shape.n_vertices
+    truth = GroundTruth(np.arange(10), np.arange(10), "ten")
+    cases = [
+        # Each was a raw numpy error or a silent wrong answer (a NaN tolerance counted every point right).
+        (lambda: result.evaluate(np.arange(5)), r"truth must be a GroundTruth or a dense true map.*got shape \(5,\)"),
+        (lambda: result.evaluate(np.full(n, 1.5)), "dtype float64"),
+        (lambda: result.evaluate(None), "truth must be a GroundTruth"),
+        (lambda: result.transfer(3.0), "transfer needs numbers, one value"),
+        (lambda: result.transfer(np.array(["a"] * n), precise=True), "transfer needs numbers"),
+        (lambda: result.precise_map().interpolate(np.arange(5)), f"at least {n}"),
+        (lambda: evaluation.feature_point_accuracy(shape, result.map, truth, tolerance=float("nan")),
+         "'tolerance' parameter must be a finite real number"),
+        (lambda: evaluation.evaluate_map(shape, result.map, truth, thresholds=[np.nan]),
+         "'threshold' parameter must be a finite real number"),
+        (lambda: evaluation.geodesic_errors(shape, np.array([0, -1]), np.array([0, 1])),
+         r"predicted\[1\] is -1, outside the target's vertices"),
+        (lambda: evaluation.geodesic_errors(shape, np.array([0, 1, 2]), np.array([0, 1])), "same points"),
+    ]
+    for call, message in cases:
+        with pytest.raises(ParameterError, match=message):
+            call()
+    assert result.evaluate(np.arange(n))["mean_error"] == pytest.approx(0.0, abs=1e-12)

@@ -45,7 +45,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ._params import check_choice, check_int
+from ._params import check_choice, check_float, check_int
 from .errors import ParameterError
 from .geodesics import GEODESIC_METHODS, geodesic_solver
 from .ground_truth import GroundTruth
@@ -219,10 +219,34 @@ def geodesic_errors(target: MeshLike, predicted: np.ndarray, truth: np.ndarray, 
         One distance per point.
     """
     mesh = _target_mesh(target)
+    predicted, truth = (_vertex_indices(name, values, mesh.n_vertices)
+                        for name, values in (("predicted", predicted), ("truth", truth)))
+    if predicted.shape != truth.shape:
+        raise ParameterError(f"predicted and truth must list the same points: got {predicted.size} and "
+                             f"{truth.size} vertices.")
     errors = _cache_for(cache, method).pair_distances(mesh, predicted, truth)
     if normalize:
         errors /= np.sqrt(mesh.area)
     return errors
+
+
+def _vertex_indices(name: str, values, n_vertices: int) -> np.ndarray:
+    """``values`` as a 1-D int64 array of vertex indices in ``[0, n_vertices)``, or :class:`ParameterError`."""
+    values = np.asarray(values)
+    if values.ndim != 1 or not np.issubdtype(values.dtype, np.integer):
+        raise ParameterError(f"{name} must be a 1-D array of integer vertex indices; got shape {values.shape} "
+                             f"and dtype {values.dtype}.")
+    bad = (values < 0) | (values >= n_vertices)
+    if bad.any():
+        first = int(np.flatnonzero(bad)[0])
+        raise ParameterError(f"{name}[{first}] is {int(values[first])}, outside the target's vertices "
+                             f"0..{n_vertices - 1}.")
+    return values.astype(np.int64)
+
+
+def _check_thresholds(thresholds) -> list[float]:
+    """Error thresholds as floats, each finite and >= 0 (a NaN threshold counted every point as under it)."""
+    return [check_float("threshold", t, minimum=0.0) for t in np.atleast_1d(np.asarray(thresholds, dtype=object))]
 
 
 def cumulative_curve(errors: np.ndarray, thresholds: np.ndarray | None = None
@@ -331,7 +355,7 @@ def evaluate_map(target: MeshLike, mapping: np.ndarray, truth: GroundTruth, *,
     """
     mesh = _target_mesh(target)
     cache = _cache_for(cache, geodesic)
-    thresholds = [float(t) for t in thresholds]
+    thresholds = _check_thresholds(thresholds)
     mapping = _check_mapping(mapping, truth, mesh.n_vertices)
     truth.check(mapping.size, mesh.n_vertices)
     sqrt_area = float(np.sqrt(mesh.area))
@@ -382,9 +406,10 @@ def feature_point_accuracy(target: MeshLike, mapping: np.ndarray, truth: GroundT
     fraction : float
         In [0, 1]; unmapped feature points count as wrong.
     """
+    tolerance = check_float("tolerance", tolerance, minimum=0.0)
     report = evaluate_map(target, mapping, truth, thresholds=[tolerance], geodesic=geodesic,
                           cache=cache)
-    return report["under"][f"{float(tolerance):g}"]
+    return report["under"][f"{tolerance:g}"]
 
 
 def map_quality(source: MeshLike, target: MeshLike, mapping: np.ndarray) -> dict:

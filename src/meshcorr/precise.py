@@ -82,7 +82,14 @@ class PreciseMap:
         interpolated : (n_source,) or (n_source, c) float
             :math:`\\sum_k w_{ik} \\, \\text{values}[f_{ik}]`; NaN where unmapped.
         """
-        values = np.asarray(values, dtype=np.float64)
+        try:
+            values = np.asarray(values, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ParameterError("interpolate needs numbers: one value (or row) per target vertex.") from None
+        needed = int(self.target_faces.max()) + 1 if self.target_faces.size else 0
+        if values.ndim not in (1, 2) or len(values) < needed:
+            raise ParameterError(f"interpolate needs one value (or row) per target vertex, at least {needed} (the "
+                                 f"target's triangles name vertex {needed - 1}); got shape {values.shape}.")
         corner_values = values[np.maximum(self.corners, 0)]  # (n, 3, ...)
         weights = self.weights.reshape(self.weights.shape + (1,) * (values.ndim - 1))
         return np.sum(weights * corner_values, axis=1)

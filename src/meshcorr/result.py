@@ -335,6 +335,9 @@ class Correspondence:
         from .transfer import check_map, pull_back
 
         values = np.asarray(values)
+        if values.ndim not in (1, 2) or not np.issubdtype(values.dtype, np.number) and values.dtype != bool:
+            raise ParameterError(f"transfer needs numbers, one value (or row) per target vertex: an (n_target,) or "
+                                 f"(n_target, c) array; got shape {values.shape} and dtype {values.dtype}.")
         n_target = self.target.n_original if self.target is not None else None
         if n_target is not None and len(values) != n_target:
             raise ParameterError(f"transfer needs one value per target vertex ({n_target}); got {len(values)}.")
@@ -412,18 +415,22 @@ class Correspondence:
 
         src, tgt = self._meshes("evaluate")
 
-        def as_truth(t):
-            if t is None or isinstance(t, GroundTruth):
+        def as_truth(t, name):
+            if t is None and name == "sym_truth" or isinstance(t, GroundTruth):
                 return t
             t = np.asarray(t)
+            if t.shape != self.map.shape or not np.issubdtype(t.dtype, np.integer):
+                raise ParameterError(f"{name} must be a GroundTruth or a dense true map: one integer target vertex "
+                                     f"per source vertex, shape {self.map.shape}; got shape {t.shape} and dtype "
+                                     f"{t.dtype}.")
             return GroundTruth(np.arange(len(t)), t, description="the true map")
 
         full_target = tgt if tgt.n_vertices == tgt.n_original else None
         if full_target is None:
             raise ParameterError("evaluate needs the whole target mesh; this map was computed on its largest "
                                  "component: use meshcorr.evaluation.evaluate_map with the target file.")
-        report = scalar_summary(evaluate_map(tgt, self.map, as_truth(truth), sym_truth=as_truth(sym_truth),
-                                             geodesic=geodesic))
+        report = scalar_summary(evaluate_map(tgt, self.map, as_truth(truth, "truth"),
+                                             sym_truth=as_truth(sym_truth, "sym_truth"), geodesic=geodesic))
         report.update(map_quality(src, tgt, self.local_map()))
         return report
 

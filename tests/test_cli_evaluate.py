@@ -71,7 +71,7 @@ def test_evaluate_curve_png(pair, tmp_path):
 
 @pytest.mark.parametrize("change, message, code", [
     (lambda f: [str(f / "missing.txt"), "--gt", "identity"], "No such file", 3),
-    (lambda f: [str(f / "short.txt"), "--gt", str(f / "truth.txt")], "has 127 entries", 2),
+    (lambda f: [str(f / "short.txt"), "--gt", str(f / "truth.txt")], "has 127 entries", 3),
     (lambda f: [str(f / "truth.txt"), "--gt", str(f / "a.vts")], "indexes one mesh only", 3),
     (lambda f: [str(f / "truth.txt"), "--gt", str(f / "a.vts"), "--gt", str(f / "nope.vts")],
      "No such ground-truth", 3),

@@ -147,8 +147,8 @@ def test_show_errors_are_one_line(pair, tmp_path, capsys):
         (_args(pair, "-o", tmp_path / "missing" / "c.png"), "does not exist"),
         (_args(pair, "-o", tmp_path / "d.png", "--error"), "--gt"),
     ]
-    for argv, message in cases:
-        assert main(["show", *argv]) == 2
+    for number, (argv, message) in enumerate(cases):
+        assert main(["show", *argv]) == (3 if number < 2 else 2)  # a map file that does not fit is bad data
         err = capsys.readouterr().err
         assert err.startswith("meshcorr: error:") and message in err and "Traceback" not in err
         assert err.count("\n") == 1
@@ -267,6 +267,11 @@ def test_transfer_errors_are_one_line(pair, tmp_path, capsys):
         assert main(["transfer", *argv]) == 2
         err = capsys.readouterr().err
         assert err.startswith("meshcorr: error:") and message in err, err
+    far = tmp_path / "far.txt"  # a map file that does not fit the meshes: bad input data
+    write_map(far, np.full(pair["n_source"], pair["n_target"]))
+    assert main(["transfer", str(pair["source"]), str(pair["target"]), str(far), "--attribute", "xyz",
+                 "-o", str(tmp_path / "f.ply")]) == 3
+    assert "outside the target's vertex range" in capsys.readouterr().err
     assert not list(tmp_path.glob("*.ply"))
 
 

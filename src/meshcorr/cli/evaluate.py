@@ -79,7 +79,8 @@ def run(args) -> int:
     from ..errors import ParameterError
     from ..evaluation import cumulative_curve, evaluate_map, map_quality, scalar_summary
     from ..ground_truth import load_ground_truth
-    from ..io import check_outputs, read_map, read_mesh
+    from ..io import check_outputs, read_mesh
+    from ._mapfile import read_checked_map
     from ..mesh import Mesh, as_mesh
 
     thresholds = _thresholds(args.thresholds)
@@ -91,10 +92,7 @@ def run(args) -> int:
     source = read_mesh(args.source, name=f"SOURCE {args.source}")
     n_source = len(source[0])
     target = as_mesh(args.target, name=f"TARGET {args.target}")
-    mapping = read_map(args.map, name="MAP")
-    if mapping.size != n_source:
-        raise ParameterError(f"{args.map} has {mapping.size} entries but SOURCE has {n_source} "
-                             "vertices; a map has one line per source vertex.")
+    mapping = read_checked_map(args.map, n_source, target.n_vertices)
     truth = load_ground_truth(args.gt, n_source=n_source, n_target=target.n_vertices)
     sym = (load_ground_truth(_sym_spec(args.gt, args.sym), n_source=n_source,
                              n_target=target.n_vertices) if args.sym else None)

@@ -58,15 +58,14 @@ def add_parser(sub) -> None:
 
 
 def _inputs(args, target_mesh=None):
-    from ..io import read_map
     from ..mesh import as_mesh
-    from ..transfer import check_map
+    from ._mapfile import read_checked_map
 
     source = as_mesh(args.source, name=args.source)
     target = as_mesh(target_mesh if target_mesh is not None else args.target, name=args.target)
     mapping = None
     if args.map is not None:
-        mapping = check_map(read_map(args.map), source.n_vertices, target.n_vertices, name=args.map)
+        mapping = read_checked_map(args.map, source.n_vertices, target.n_vertices)
     return source, target, mapping
 
 

@@ -63,7 +63,8 @@ def dense_truth(spec, n_source: int, n_target: int) -> np.ndarray:
 
 def run(args) -> int:
     from ..errors import ParameterError
-    from ..io import read_map, read_mesh
+    from ..io import read_mesh
+    from ._mapfile import read_checked_map
     from ..plots import require_matplotlib
     from ..viz.figures import correspondence_figure
     from ..io import check_outputs
@@ -74,7 +75,7 @@ def run(args) -> int:
         raise ParameterError("--error colours SOURCE by its error against the ground truth: give --gt GT.")
     source = read_mesh(args.source, name=args.source)
     target = read_mesh(args.target, name=args.target)
-    mapping = read_map(args.map, name="MAP")
+    mapping = read_checked_map(args.map, len(source[0]), len(target[0]))
     truth = dense_truth(args.gt, len(source[0]), len(target[0])) if args.gt else None
     info = correspondence_figure(source, target, mapping, args.output, truth=truth,
                                  error=args.error, coloring=args.coloring, geodesic=args.geodesic,

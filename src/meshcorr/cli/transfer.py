@@ -41,8 +41,9 @@ def add_parser(sub) -> None:
 
 def run(args) -> int:
     from ..errors import ParameterError
-    from ..io import read_map, read_mesh, staged_writes, write_mesh
-    from ..transfer import check_map, read_attribute, transfer_attribute, write_values
+    from ..io import read_mesh, staged_writes, write_mesh
+    from ..transfer import read_attribute, transfer_attribute, write_values
+    from ._mapfile import read_checked_map
     from ..io import check_outputs
 
     if not args.output.lower().endswith((".ply", ".obj")):
@@ -55,7 +56,7 @@ def run(args) -> int:
     if not len(F1) and not args.output.lower().endswith(".ply"):
         raise ParameterError(f"Cannot write {args.output}: SOURCE is a point cloud; its colours are written "
                              "as a .ply file of points.")
-    mapping = check_map(read_map(args.map, name="MAP"), len(V1), len(V2), name=args.map)
+    mapping = read_checked_map(args.map, len(V1), len(V2))
     values = read_attribute(args.attribute, args.target, V2, F2)
     colors, pulled = transfer_attribute(values, mapping, cmap=args.cmap)
     with staged_writes():

@@ -1,0 +1,29 @@
+"""A map file read for a command: one that does not fit the meshes is bad input data (exit 3)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InputError, ParameterError
+
+
+def read_checked_map(path: str, n_source: int, n_target: int) -> np.ndarray:
+    """``(n_source,)`` int64: the map in ``path``, checked against the meshes' vertex counts.
+
+    Raises
+    ------
+    InputError
+        Unreadable, or not one entry in ``[-1, n_target)`` per source vertex
+        (:func:`meshcorr.transfer.check_map`, whose :class:`ParameterError`
+        is about an argument; here the file is the data at fault).
+    """
+    from ..io import read_map
+    from ..transfer import check_map
+
+    mapping = read_map(path, name="MAP")
+    try:
+        return check_map(mapping, n_source, n_target, name=path)
+    except InputError:
+        raise
+    except ParameterError as error:
+        raise InputError(str(error)) from None

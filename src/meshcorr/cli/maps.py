@@ -28,21 +28,20 @@ instead (the nearest TARGET row of Phi_S C for each SOURCE vertex).
 """
 
 
-#: The arguments both commands share: (flags, options).
-_INPUTS = (
-    (("source",), dict(metavar="SOURCE", help="mesh whose vertices were mapped")),
-    (("target",), dict(metavar="TARGET", help="mesh they were mapped onto (texture: an OBJ with UVs)")),
-)
+#: The source argument both commands share: (flags, options); each has its own TARGET help.
+_SOURCE = (("source",), dict(metavar="SOURCE", help="mesh whose vertices were mapped"))
 
 
 def add_parser(sub) -> None:
     commands = {
         "texture": (TEXTURE_HELP, TEXTURE_DESCRIPTION, run_texture,
-                    [(("map",), dict(metavar="MAP", help="the vertex map (.txt or .npy)")),
+                    [(("target",), dict(metavar="TARGET", help="mesh they were mapped onto: an OBJ with UVs")),
+                     (("map",), dict(metavar="MAP", help="the vertex map (.txt or .npy)")),
                      (("-o", "--output"), dict(required=True, metavar="OUT.obj", help="SOURCE with the carried UVs")),
                      (("-k",), dict(type=int, default=40, help="basis size of the precise map (40)"))]),
         "fmap": (FMAP_HELP, FMAP_DESCRIPTION, run_fmap,
-                 [(("map",), dict(metavar="MAP", nargs="?", help="the vertex map to export")),
+                 [(("target",), dict(metavar="TARGET", help="mesh they were mapped onto")),
+                  (("map",), dict(metavar="MAP", nargs="?", help="the vertex map to export")),
                   (("-o", "--output"), dict(required=True, metavar="OUT", help="the functional map (.npz), "
                                             "or with --to-map the vertex map (.txt/.npy)")),
                   (("-k",), dict(type=int, default=30, help="basis size (30)")),
@@ -52,7 +51,7 @@ def add_parser(sub) -> None:
     for name, (help_text, description, run, arguments) in commands.items():
         parser = sub.add_parser(name, help=help_text, description=description,
                                 formatter_class=argparse.RawDescriptionHelpFormatter)
-        for flags, options in _INPUTS + tuple(arguments):
+        for flags, options in (_SOURCE, *arguments):
             parser.add_argument(*flags, **options)
         parser.set_defaults(run=run)
 

@@ -309,3 +309,17 @@ def test_wrong_values_for_the_result_s_methods_are_refused_by_name(shape):
         with pytest.raises(ParameterError, match=message):
             call()
     assert result.evaluate(np.arange(n))["mean_error"] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_a_functional_map_and_a_matcher_refuse_wrong_inputs_by_name(shape):
+    from meshcorr import fmap
+
+    basis = np.random.default_rng(0).normal(size=(20, 4))
+    with pytest.raises(ParameterError, match="C holds NaN"):  # was an all-zero map
+        fmap.point_map(np.full((4, 4), np.nan), basis, basis)
+    result = meshcorr.match(shape, shape, refine=False)
+    functional = result.functional_map(k=6)
+    with pytest.raises(ParameterError, match="one value .or row. per target vertex"):
+        functional.transfer(np.zeros(5))
+    with pytest.raises(ParameterError, match="settings must be a meshcorr.Settings"):
+        Matcher(settings={"k": 6})

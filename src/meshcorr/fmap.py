@@ -117,6 +117,9 @@ class FunctionalMap:
             part of ``values`` carried to the source.
         """
         values = np.asarray(values, dtype=np.float64)
+        if values.ndim not in (1, 2) or len(values) != len(self.target_basis):
+            raise ParameterError(f"transfer needs one value (or row) per target vertex ({len(self.target_basis)}); "
+                                 f"got shape {values.shape}.")
         coefficients = self.target_basis.T @ (self.target_mass.reshape((-1,) + (1,) * (values.ndim - 1)) * values)
         return self.source_basis @ (self.C @ coefficients)
 
@@ -207,4 +210,7 @@ def point_map(C: np.ndarray, source_basis: np.ndarray, target_basis: np.ndarray)
     if C.shape != (source_basis.shape[1], target_basis.shape[1]):
         raise ParameterError(f"C has shape {C.shape} but the bases have {source_basis.shape[1]} and "
                              f"{target_basis.shape[1]} columns; C must be (k_source, k_target).")
+    for name, array in (("C", C), ("source_basis", source_basis), ("target_basis", target_basis)):
+        if not np.isfinite(array).all():  # NaN distances made every vertex map to vertex 0
+            raise ParameterError(f"{name} holds NaN or infinite values; a functional map needs finite numbers.")
     return _nearest_rows(np.asarray(source_basis) @ C, np.asarray(target_basis))

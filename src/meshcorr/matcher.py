@@ -10,7 +10,7 @@ work.
 
 from __future__ import annotations
 
-from .errors import MeshcorrError
+from .errors import MeshcorrError, ParameterError
 from .mesh import MeshLike
 from .progress import as_progress
 from .result import Correspondence
@@ -47,6 +47,10 @@ class Matcher:
     """
 
     def __init__(self, settings: Settings | None = None, **options) -> None:
+        if settings is not None and not isinstance(settings, Settings):
+            raise ParameterError(f"settings must be a meshcorr.Settings (or None, with keywords: Matcher(k=6, ...)); "
+                                 f"got {type(settings).__name__}. Pass single settings as keywords: "
+                                 "Matcher(**options).")
         self.settings = settings
         self.options = options
 

@@ -323,3 +323,25 @@ def test_a_functional_map_and_a_matcher_refuse_wrong_inputs_by_name(shape):
         functional.transfer(np.zeros(5))
     with pytest.raises(ParameterError, match="settings must be a meshcorr.Settings"):
         Matcher(settings={"k": 6})
+
+
+def test_a_mesh_made_directly_is_checked():
+    from meshcorr.errors import MeshError
+    from meshcorr.mesh import Mesh
+
+    shape = ds.creature(resolution=1)
+    V, F = np.asarray(shape.vertices), np.asarray(shape.faces)
+    nan = V.copy()
+    nan[3] = np.nan
+    for make, message in [(lambda: Mesh(V[:, :2], F), r"vertices must be \(n, 3\)"),
+                          (lambda: Mesh(nan, F), "NaN or infinite"),
+                          (lambda: Mesh(V, F + len(V)), f"a face names vertex [0-9]+, outside 0..{len(V) - 1}"),
+                          (lambda: Mesh(V, F + 0.5), "integer vertex indices")]:
+        with pytest.raises(MeshError, match=message):  # were raw numpy / scipy / geometry-central errors
+            make()
+    two = Mesh(np.vstack([V, V + 10]), np.vstack([F, F + len(V)]))
+    with pytest.raises(MeshError, match="2 connected components"):  # was matched whole
+        meshcorr.match(two, shape)
+    piece = meshcorr.as_mesh(two, largest_component=True)
+    assert piece.n_vertices == len(V) and piece.n_original == 2 * len(V)
+    assert meshcorr.as_mesh(piece) is piece  # a connected mesh is passed through, its caches kept

@@ -97,7 +97,7 @@ def test_largest_component_maps_only_the_kept_vertices(shape):
 
 def test_too_few_vertices_names_k():
     tet = trimesh.creation.box()  # 8 vertices
-    with pytest.raises(MeshError, match="k=8 needs at least 10 vertices"):
+    with pytest.raises(MeshError, match=r"at least 10 are needed: the spectral embedding with k=8 \(-k\)"):
         meshcorr.match((tet.vertices, tet.faces), (tet.vertices, tet.faces), k=8)
 
 

@@ -47,10 +47,22 @@ class Mesh:
 
     def __init__(self, vertices: np.ndarray, faces: np.ndarray, *, name: str = "mesh",
                  kept: np.ndarray | None = None, n_original: int | None = None, n_caps: int = 0) -> None:
+        faces = np.asarray(faces)
+        if faces.size and not np.issubdtype(faces.dtype, np.integer):  # 0.5 would be truncated silently
+            raise MeshError(f"{name}: faces must be integer vertex indices; got dtype {faces.dtype}.")
         self.vertices = np.array(vertices, dtype=np.float64)
         self.faces = np.array(faces, dtype=np.int64)
         if self.faces.size == 0:  # a point cloud
             self.faces = self.faces.reshape(0, 3)
+        # The checks every later step relies on (as_mesh validates fully: manifold, components, ...).
+        if self.vertices.ndim != 2 or self.vertices.shape[1] != 3 or self.faces.ndim != 2 or self.faces.shape[1] != 3:
+            raise MeshError(f"{name}: vertices must be (n, 3) and faces (m, 3); got {self.vertices.shape} and "
+                            f"{self.faces.shape}.")
+        if not np.isfinite(self.vertices).all():
+            raise MeshError(f"{name}: NaN or infinite vertex coordinates; repair the mesh (as_mesh names them).")
+        outside = self.faces[(self.faces < 0) | (self.faces >= len(self.vertices))]
+        if outside.size:
+            raise MeshError(f"{name}: a face names vertex {int(outside[0])}, outside 0..{len(self.vertices) - 1}.")
         self.kept = np.arange(len(self.vertices)) if kept is None else np.asarray(kept, dtype=np.int64)
         self.n_original = len(self.vertices) if n_original is None else int(n_original)
         self.n_caps = int(n_caps)
@@ -131,6 +143,11 @@ def as_mesh(obj: MeshLike, *, name: str | None = None, largest_component: bool =
     if isinstance(obj, Mesh):
         if obj.n_vertices < min_vertices:
             raise MeshError(f"{obj.name} has {obj.n_vertices} vertices; at least {min_vertices} are needed. {reason}")
+        if not obj.is_cloud and obj.n_caps == 0 and _components(obj) > 1:  # made directly, not by as_mesh
+            piece = as_mesh((obj.vertices, obj.faces), name=obj.name, largest_component=largest_component,
+                            min_vertices=min_vertices, reason=reason)  # raises without largest_component
+            return Mesh(piece.vertices, piece.faces, name=obj.name, kept=obj.kept[piece.kept],
+                        n_original=obj.n_original)
         return obj
     if isinstance(obj, (str, os.PathLike)):
         from .io import read_mesh
@@ -159,6 +176,18 @@ def as_mesh(obj: MeshLike, *, name: str | None = None, largest_component: bool =
     vertices, faces, kept = validate_mesh(vertices, faces, min_vertices=min_vertices,
                                           largest_component=largest_component, name=name, reason=reason)
     return Mesh(vertices, faces, name=name, kept=kept, n_original=n_original)
+
+
+def _components(mesh: Mesh) -> int:
+    """Number of connected components of a triangle mesh's edge graph (cached on the mesh)."""
+    if ("components",) not in mesh._cache:
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import connected_components
+
+        edges = np.concatenate([mesh.faces[:, [0, 1]], mesh.faces[:, [1, 2]]])
+        graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(mesh.n_vertices,) * 2)
+        mesh._cache[("components",)] = connected_components(graph, directed=False)[0]
+    return mesh._cache[("components",)]
 
 
 def _no_faces(faces) -> bool:

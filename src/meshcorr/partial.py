@@ -147,7 +147,8 @@ def check_partial_options(partial, method: str, changed: dict) -> None:
                               "image is result.alternative_map (--alternative-out).")
     if changed.get("extremities") is False and changed.get("landmarks") is None:
         raise PartialityError("partial matching starts from matched extremities or from landmarks: keep "
-                              "extremities=True (drop --no-extremities) or give landmarks=[(i, j), ...] (--landmarks FILE).")
+                              "extremities=True (drop --no-extremities) or give landmarks=[(i, j), ...] "
+                              "(--landmarks FILE).")
 
 
 def partiality_suspicion(source: Mesh, target: Mesh, source_diameter: float, target_diameter: float) -> str:

@@ -258,18 +258,18 @@ def _match(args, landmarks):
     from .. import match
 
     return match(args.source, args.target, symmetry=args.symmetry, refine=args.refine,
-                   anchor_scale=args.anchor_scale, k=args.k, geodesic=args.geodesic,
-                   scale_eigenvalues=args.scale_eigenvalues, reorder=args.reorder,
-                   icp_iterations=args.icp_iterations, n_control=args.n_control, anneal=args.anneal,
-                   n_anchors=args.n_anchors, anchor_weight=args.anchor_weight, bijective=args.bijective,
-                   largest_component=args.largest_component, random_state=args.seed,
-                   progress=progress_for(args, f"{os.path.basename(args.source)} -> "
-                                               f"{os.path.basename(args.target)}"),
-                   method=args.method, prealign=args.prealign, mode=args.mode,
-                   n_samples=args.n_samples, max_memory=args.max_memory,
-                   scalable_above=args.scalable_above, refine_k=args.refine_k, shells=args.shells, landmarks=landmarks,
-                   extremities=args.extremities, oriented_starts=args.oriented_starts, partial=args.partial,
-                   fill_holes=args.fill_holes)
+                 anchor_scale=args.anchor_scale, k=args.k, geodesic=args.geodesic,
+                 scale_eigenvalues=args.scale_eigenvalues, reorder=args.reorder,
+                 icp_iterations=args.icp_iterations, n_control=args.n_control, anneal=args.anneal,
+                 n_anchors=args.n_anchors, anchor_weight=args.anchor_weight, bijective=args.bijective,
+                 largest_component=args.largest_component, random_state=args.seed,
+                 progress=progress_for(args, f"{os.path.basename(args.source)} -> "
+                                             f"{os.path.basename(args.target)}"),
+                 method=args.method, prealign=args.prealign, mode=args.mode,
+                 n_samples=args.n_samples, max_memory=args.max_memory,
+                 scalable_above=args.scalable_above, refine_k=args.refine_k, shells=args.shells,
+                 landmarks=landmarks, extremities=args.extremities, oriented_starts=args.oriented_starts,
+                 partial=args.partial, fill_holes=args.fill_holes)
 
 
 def _read_landmarks(args):
@@ -295,7 +295,8 @@ def _read_landmarks(args):
             raise ParameterError(f"--landmarks-vts: {args.landmarks_vts[0]} has {len(a)} lines and "
                                  f"{args.landmarks_vts[1]} has {len(b)}; line k of each must be landmark k.")
         pairs = np.stack([a, b], axis=1)
-        return pairs, [lambda column, row=row: (args.landmarks_vts[column], int((lines_a, lines_b)[column][row]),
+        return pairs, [lambda column, row=row: (args.landmarks_vts[column],
+                                                int((lines_a, lines_b)[column][row]),
                                                 int(pairs[row, column]) + 1, 1) for row in range(len(pairs))]
     return None, []
 
@@ -311,10 +312,11 @@ def _landmark_lines(lines):
         path, number, value, base = lines[error.row](error.column)
         side = ("source", "target")[error.column]
         if error.problem == "range":
-            reason = (f"{side} vertex {value} is outside the {side} mesh's vertices {base}..{error.limit - 1 + base} "
-                      f"({'1-based, as in a .vts file' if base else '0-based'}).")
+            reason = (f"{side} vertex {value} is outside the {side} mesh's vertices "
+                      f"{base}..{error.limit - 1 + base} ({'1-based, as in a .vts file' if base else '0-based'}).")
         elif error.problem == "repeat":
-            reason = (f"source vertex {value} already has another target vertex on line {lines[error.first](0)[1]}; "
+            first_line = lines[error.first](0)[1]
+            reason = (f"source vertex {value} already has another target vertex on line {first_line}; "
                       "give each source vertex one target vertex.")
         else:
             reason = (f"{side} vertex {value} lies on a component that was removed (--largest-component); "

@@ -50,7 +50,10 @@ def _faces_below(mesh: Mesh, values: np.ndarray, keep: float) -> np.ndarray:
     largest piece (:func:`submesh`'s) of at least ``keep`` of the area: a cut
     that severs a limb takes more of the rest, so the part keeps the asked
     area instead of losing the limb's share. Bisection over the number of
-    faces taken; the largest piece grows with it.
+    faces taken (the largest piece grows with it); where a severed piece
+    rejoins at once, the count just below is taken if its piece is nearer
+    to ``keep``. A cut whose faces of ``keep`` of the area are one piece is
+    the plain area quantile.
     """
     face_values = values[mesh.faces].mean(axis=1)
     order = np.argsort(face_values, kind="stable")

@@ -345,3 +345,8 @@ def test_a_mesh_made_directly_is_checked():
     piece = meshcorr.as_mesh(two, largest_component=True)
     assert piece.n_vertices == len(V) and piece.n_original == 2 * len(V)
     assert meshcorr.as_mesh(piece) is piece  # a connected mesh is passed through, its caches kept
+
+
+def test_a_synthetic_shape_prints_in_one_short_line():
+    text = repr(ds.creature(resolution=1))
+    assert text == "SyntheticShape(name='creature-r1-rest', n_vertices=500, n_faces=996, chart='creature')"

@@ -142,6 +142,10 @@ class SyntheticShape:
         """Number of vertices."""
         return len(self.vertices)
 
+    def __repr__(self) -> str:  # not the dataclass's: it printed every array (17 000 characters at 500 vertices)
+        return (f"SyntheticShape(name={self.name!r}, n_vertices={self.n_vertices}, n_faces={len(self.faces)}, "
+                f"chart={self.chart!r})")
+
 
 # --------------------------------------------------------------------------
 # parameter checks

@@ -483,6 +483,15 @@ def test_ctrl_c_in_a_terminal_stops_the_local_cluster_without_worker_tracebacks(
     assert "Traceback" not in rest and rest.strip().splitlines()[-1] == "meshcorr: interrupted", rest
 
 
+def test_cli_consistency_report_names_what_it_compares(cluster, shapes, tmp_path, capsys):
+    paths, _ = shapes
+    assert main(["batch", "--all-pairs", *paths[:3], "--consistency", "--out", str(tmp_path / "o"),
+                 "--scheduler", cluster.scheduler.address, "-q"]) == 0
+    err = capsys.readouterr().err
+    assert "cycle-consistency error" in err and "(the batch's maps)" in err and "all composed through" in err
+    assert (tmp_path / "o" / "consistency.json").is_file()
+
+
 class _CrashingClient:
     """A stand-in client whose pair tasks fail in the scheduler (as when a pair kills its worker)."""
 

@@ -204,8 +204,9 @@ def run(args) -> int:
                                     random_state=args.seed)
         direct, through = (f"{v:.4f}" if v is not None else "n/a (no mapped vertex sampled)"
                            for v in (report["cycle_error"], report["consistent_cycle_error"]))
-        print(f"meshcorr: cycle-consistency error {direct} (direct maps), {through} (through {report['hub']}); "
-              f"see {report['path']}", file=sys.stderr)
+        made = "the batch's maps, made through its hub" if args.hub else "the batch's maps"
+        print(f"meshcorr: cycle-consistency error {direct} ({made}), {through} (all composed through "
+              f"{report['hub']}, the shape that agrees best with the others); see {report['path']}", file=sys.stderr)
     if not args.quiet:
         hubs = {r["via"] for r in records if r.get("via")}
         made = sum(bool(r.get("via")) and r["status"] == "ok" for r in records)

@@ -350,3 +350,10 @@ def test_a_mesh_made_directly_is_checked():
 def test_a_synthetic_shape_prints_in_one_short_line():
     text = repr(ds.creature(resolution=1))
     assert text == "SyntheticShape(name='creature-r1-rest', n_vertices=500, n_faces=996, chart='creature')"
+
+
+def test_the_laplace_beltrami_basis_names_its_own_k():
+    from meshcorr import fmap
+
+    with pytest.raises(ParameterError, match="The 'k' parameter must be an int >= 2. Got 0"):
+        fmap.laplace_beltrami(meshcorr.as_mesh(ds.creature(resolution=1)), 0)

@@ -70,6 +70,7 @@ def laplace_beltrami(mesh: Mesh, k: int, *, random_state: int | None = 0
     """
     from .laplacian import vertex_areas
 
+    k = check_int("k", k, minimum=2, maximum=max(2, mesh.n_vertices - 1))  # named as here, not as refine_k
     values, basis = laplace_basis(mesh, k, random_state=random_state)
     mass = vertex_areas(mesh)  # of a point cloud: its Laplacian's (meshcorr.laplacian)
     return values, basis, mass / mass.sum()

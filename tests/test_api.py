@@ -357,3 +357,10 @@ def test_the_laplace_beltrami_basis_names_its_own_k():
 
     with pytest.raises(ParameterError, match="The 'k' parameter must be an int >= 2. Got 0"):
         fmap.laplace_beltrami(meshcorr.as_mesh(ds.creature(resolution=1)), 0)
+
+
+def test_params_say_whether_the_shells_ran(shape):
+    points = np.asarray(ds.creature(resolution=1).vertices)
+    assert meshcorr.match(points, points).params["shells"] is False  # a cloud keeps the ZoomOut map
+    assert meshcorr.match(shape, shape, bijective=True).params["shells"] is False
+    assert meshcorr.match(shape, shape).params["shells"] is True

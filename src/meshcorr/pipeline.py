@@ -354,8 +354,8 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
                   n_anchors=n_anchors, anchor_weight=anchor_weight, bijective=bijective,
                   largest_component=largest_component, random_state=random_state, mode=mode,
                   n_samples=n_samples, max_memory=max_memory, symmetry=symmetry, refine=refine,
-                  refine_k=refine_k, shells=shells, anchor_scale=anchor_scale, extremities=extremities,
-                  oriented_starts=oriented_starts, fill_holes=settings["fill_holes"],
+                  refine_k=refine_k, shells=shell_stage, anchor_scale=anchor_scale, extremities=extremities,
+                  oriented_starts=oriented_starts, fill_holes=settings["fill_holes"],  # as they ran
                   landmarks=None if pairs is None else np.stack([src.kept[pairs[:, 0]], tgt.kept[pairs[:, 1]]],
                                                                 axis=1).tolist())
     return restrict(Correspondence(  # without the holes' caps (meshcorr.holes)

@@ -92,7 +92,9 @@ class Correspondence:
         (``"refine_bases"``: the refinement's Laplace-Beltrami bases, see
         :func:`meshcorr.refine.prefetch_bases`); not part of the sum above.
     params : dict
-        The options used.
+        The options used; ``shells`` and ``fill_holes`` as they ran (False
+        where they do not apply: point clouds, ``bijective``, ``partial``,
+        ``refine=False`` for the shells).
     candidates : list of dict
         The near-tied configurations whose maps were scored to resolve the
         left/right mirror (:mod:`meshcorr.symmetry`): rank, perm, signs,

@@ -364,3 +364,8 @@ def test_params_say_whether_the_shells_ran(shape):
     assert meshcorr.match(points, points).params["shells"] is False  # a cloud keeps the ZoomOut map
     assert meshcorr.match(shape, shape, bijective=True).params["shells"] is False
     assert meshcorr.match(shape, shape).params["shells"] is True
+
+
+def test_more_anchors_than_vertices_are_refused(shape):
+    with pytest.raises(ParameterError, match=f"n_anchors={shape.n_vertices + 1} .* smaller shape's"):
+        meshcorr.match(shape, shape, n_anchors=shape.n_vertices + 1)  # ran, with repeated anchor vertices

@@ -256,6 +256,10 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         shapes = pair_shapes(source, target, settings)
         src, tgt = as_meshes(*shapes)
         pairs = check_landmarks(landmarks, src, tgt)
+    if n_anchors > min(src.n_vertices, tgt.n_vertices):  # each anchor pairs two distinct vertices
+        raise ParameterError(f"n_anchors={n_anchors} (--anchors) is more than the smaller shape's "
+                             f"{min(src.n_vertices, tgt.n_vertices)} vertices; the paper's few anchors (3-10) "
+                             "are what the matching needs.")
     if pairs is not None and symmetry != "auto":
         raise ParameterError(f"Landmarks settle the left/right choice in the whole-map choice (symmetry='auto'); "
                              f"symmetry={symmetry!r} (--symmetry {symmetry}) would set them aside. Keep "

@@ -369,3 +369,11 @@ def test_params_say_whether_the_shells_ran(shape):
 def test_more_anchors_than_vertices_are_refused(shape):
     with pytest.raises(ParameterError, match=f"n_anchors={shape.n_vertices + 1} .* smaller shape's"):
         meshcorr.match(shape, shape, n_anchors=shape.n_vertices + 1)  # ran, with repeated anchor vertices
+
+
+def test_a_saved_result_keeps_its_meshes_names(shape, tmp_path):
+    named = meshcorr.as_mesh(shape, name="tube.off")
+    result = meshcorr.match(named, named, refine=False)
+    result.save(tmp_path / "r.npz")
+    loaded = Correspondence.load(tmp_path / "r.npz")
+    assert (loaded.source.name, loaded.target.name) == ("tube.off", "tube.off")  # were "source" and "target"

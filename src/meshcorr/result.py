@@ -465,6 +465,8 @@ class Correspondence:
                 if f.name not in _ARRAYS and f.name not in _SPECIAL}
         rest["configuration"] = self.configuration.to_dict() if self.configuration else None
         rest["alternatives"] = [c.to_dict() for c in self.alternatives]
+        rest["mesh_names"] = {role: getattr(self, role).name for role in ("source", "target")
+                              if getattr(self, role) is not None}
         text = json.dumps(rest, default=_json_default)
         write_npz(path, {**arrays, "json": np.frombuffer(text.encode(), dtype=np.uint8)})
 
@@ -488,11 +490,11 @@ class Correspondence:
             to_config = lambda d: Configuration(tuple(d["perm"]), tuple(d["signs"]), d["cost"])  # noqa: E731
             rest["configuration"] = to_config(configuration) if configuration else None
             rest["alternatives"] = [to_config(d) for d in rest["alternatives"]]
-            meshes = {}
+            meshes, names = {}, rest.pop("mesh_names", {})  # files saved before the names were: the roles
             for role in ("source", "target"):
                 if f"{role}_mesh_vertices" in arrays:
                     meshes[role] = Mesh(arrays.pop(f"{role}_mesh_vertices"), arrays.pop(f"{role}_mesh_faces"),
-                                        name=role, kept=arrays.pop(f"{role}_mesh_kept"),
+                                        name=names.get(role, role), kept=arrays.pop(f"{role}_mesh_kept"),
                                         n_original=int(arrays.pop(f"{role}_mesh_n_original")))
             eigenvalues = {key[len("eigenvalues_"):]: arrays.pop(key) for key in list(arrays)
                            if key.startswith("eigenvalues_")}

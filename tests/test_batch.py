@@ -249,6 +249,20 @@ def test_an_interrupted_batch_resumes(cluster, shapes, tmp_path):
         batch(pairs, tmp_path, client=cluster, random_state=1)
 
 
+def test_a_finished_batch_reruns_without_starting_a_cluster(cluster, shapes, tmp_path, monkeypatch):
+    paths, _ = shapes
+    pairs = template_pairs(paths[0], paths[:3])
+    batch(pairs, tmp_path, client=cluster)
+
+    def no_cluster(*args, **kwargs):
+        raise AssertionError("a cluster was started for nothing to do")
+
+    monkeypatch.setattr(distributed, "LocalCluster", no_cluster)
+    totals = []
+    records = batch(pairs, tmp_path, progress=lambda d, t, f, s: totals.append(t))
+    assert totals == [0] and [r["status"] for r in records] == ["ok", "ok"]
+
+
 def test_a_rerun_redoes_the_pairs_of_a_changed_mesh_and_keeps_the_others_records(cluster, shapes, tmp_path):
     import shutil
 

@@ -245,6 +245,11 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
                 and record.get("inputs", inputs(a, b)) == inputs(a, b))  # a changed mesh or --gt: again
 
     todo = [(a, b) for a, b in pairs if not done_before(a, b)]
+    if not todo:  # all done before: no cluster to start
+        if progress is not None:
+            progress(0, 0, 0, None)
+        _write_summary(out, _in_order(records, pairs))
+        return [records[p] for p in pairs]
 
     try:
         with _client(distributed, client, n_workers) as dask_client:

@@ -17,7 +17,7 @@ import numpy as np
 from .errors import MeshError
 from .geodesics import ProgressFn, pairwise_geodesics
 from .pointcloud import validate_cloud
-from .validate import validate_mesh
+from .validate import _check_vertex_count, _select_component, validate_mesh
 
 
 class Mesh:
@@ -143,12 +143,16 @@ def as_mesh(obj: MeshLike, *, name: str | None = None, largest_component: bool =
     if isinstance(obj, Mesh):
         if obj.n_vertices < min_vertices:
             raise MeshError(f"{obj.name} has {obj.n_vertices} vertices; at least {min_vertices} are needed. {reason}")
-        if not obj.is_cloud and obj.n_caps == 0 and _components(obj) > 1:  # made directly, not by as_mesh
-            piece = as_mesh((obj.vertices, obj.faces), name=obj.name, largest_component=largest_component,
-                            min_vertices=min_vertices, reason=reason)  # raises without largest_component
-            return Mesh(piece.vertices, piece.faces, name=obj.name, kept=obj.kept[piece.kept],
-                        n_original=obj.n_original)
-        return obj
+        if obj.is_cloud or obj.n_caps or ("connected",) in obj._cache:
+            return obj
+        # A Mesh made directly, not by as_mesh: its components are checked as any input's (this raises
+        # without largest_component).
+        vertices, faces, kept = _select_component(obj.vertices, obj.faces, largest_component, obj.name)
+        if len(kept) == obj.n_vertices:
+            obj._cache[("connected",)] = True
+            return obj
+        _check_vertex_count(len(kept), min_vertices, obj.name, reason)
+        return Mesh(vertices, faces, name=obj.name, kept=obj.kept[kept], n_original=obj.n_original)
     if isinstance(obj, (str, os.PathLike)):
         from .io import read_mesh
 
@@ -176,18 +180,6 @@ def as_mesh(obj: MeshLike, *, name: str | None = None, largest_component: bool =
     vertices, faces, kept = validate_mesh(vertices, faces, min_vertices=min_vertices,
                                           largest_component=largest_component, name=name, reason=reason)
     return Mesh(vertices, faces, name=name, kept=kept, n_original=n_original)
-
-
-def _components(mesh: Mesh) -> int:
-    """Number of connected components of a triangle mesh's edge graph (cached on the mesh)."""
-    if ("components",) not in mesh._cache:
-        from scipy.sparse import coo_matrix
-        from scipy.sparse.csgraph import connected_components
-
-        edges = np.concatenate([mesh.faces[:, [0, 1]], mesh.faces[:, [1, 2]]])
-        graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(mesh.n_vertices,) * 2)
-        mesh._cache[("components",)] = connected_components(graph, directed=False)[0]
-    return mesh._cache[("components",)]
 
 
 def _no_faces(faces) -> bool:

@@ -360,10 +360,15 @@ def validate_mesh(
     _check_degenerate(vertices, faces, name)
     _check_manifold(faces, len(vertices), name)
     vertices, faces, kept = _select_component(vertices, faces, largest_component, name)
-    if len(vertices) < min_vertices:
+    _check_vertex_count(len(vertices), min_vertices, name, reason)
+    return vertices, faces, kept
+
+
+def _check_vertex_count(n_vertices: int, min_vertices: int, name: str, reason: str = "") -> None:
+    """Refuse a mesh of fewer than ``min_vertices`` vertices (:class:`MeshError`, ``reason`` says why)."""
+    if n_vertices < min_vertices:
         why = f": {reason.rstrip('.')}" if reason else ""
         raise MeshError(
-            f"{name} has {len(vertices)} vertices but at least {min_vertices} are "
+            f"{name} has {n_vertices} vertices but at least {min_vertices} are "
             f"needed{why}. Use a finer mesh or lower the parameter that needs them."
         )
-    return vertices, faces, kept

@@ -241,8 +241,10 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
 
     def done_before(a: str, b: str) -> bool:
         record = records.get((a, b), {})
-        return (record.get("status") == DONE and (out / "maps" / map_name(a, b)).is_file()
-                and record.get("inputs", inputs(a, b)) == inputs(a, b))  # a changed mesh or --gt: again
+        if record.get("status") != DONE or not (out / "maps" / map_name(a, b)).is_file():
+            return False
+        key = inputs(a, b)
+        return record.get("inputs", key) == key  # a changed mesh or --gt: again (older records lack the key)
 
     todo = [(a, b) for a, b in pairs if not done_before(a, b)]
     if not todo:  # all done before: no cluster to start

@@ -246,7 +246,7 @@ def _vertex_indices(name: str, values, n_vertices: int) -> np.ndarray:
 
 def _check_thresholds(thresholds) -> list[float]:
     """Error thresholds as floats, each finite and >= 0 (a NaN threshold counted every point as under it)."""
-    return [check_float("threshold", t, minimum=0.0) for t in np.atleast_1d(np.asarray(thresholds, dtype=object))]
+    return [check_float("threshold", t, minimum=0.0) for t in thresholds]
 
 
 def cumulative_curve(errors: np.ndarray, thresholds: np.ndarray | None = None

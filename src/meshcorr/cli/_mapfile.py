@@ -23,7 +23,5 @@ def read_checked_map(path: str, n_source: int, n_target: int) -> np.ndarray:
     mapping = read_map(path, name="MAP")
     try:
         return check_map(mapping, n_source, n_target, name=path)
-    except InputError:
-        raise
     except ParameterError as error:
         raise InputError(str(error)) from None

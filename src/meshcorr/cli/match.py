@@ -8,6 +8,8 @@ import os
 import sys
 from contextlib import contextmanager
 
+import numpy as np
+
 from ..baselines import METHODS, SPATIAL_METHODS
 from ..errors import InputError, LandmarkError, ParameterError
 from ..geodesics import GEODESIC_METHODS
@@ -207,10 +209,10 @@ def run(args) -> int:
     inputs.update({f"--landmarks-vts {v}": v for v in args.landmarks_vts or ()})
     check_outputs({"-o": args.output, "--alternative-out": args.alternative_out, "--report": args.report},
                   inputs)
-    landmarks, lines = _read_landmarks(args)
+    landmarks, origin = _read_landmarks(args)
     if args.verbose:
         print(f"meshcorr: matching {args.source} -> {args.target}", file=sys.stderr)
-    with _landmark_lines(lines):
+    with _landmark_lines(landmarks, origin):
         result = _match(args, landmarks)
     if args.alternative_out and result.alternative_map is None:
         raise ParameterError(f"No alternative map to write to {args.alternative_out}: only the spectral "
@@ -273,55 +275,49 @@ def _match(args, landmarks):
 
 
 def _read_landmarks(args):
-    """The ``(L, 2)`` pairs of ``--landmarks`` or ``--landmarks-vts`` (or None), and where each came from.
+    """The ``(L, 2)`` pairs of ``--landmarks`` or ``--landmarks-vts`` (or None), and where they came from.
 
-    The second item: for each pair a function of its column (0: source, 1: target) giving the
-    file and line number it was read from, the index as written there and the index base (1 in a
-    ``.vts``).
+    The second item, for messages (None without landmarks): the files of the source and target
+    columns, each pair's ``(L, 2)`` line numbers in them, and the base the indices are written in
+    (1 in a ``.vts``).
     """
-    from ..landmark_map import read_landmark_lines
-
     if args.landmarks_file is not None:
-        pairs, numbers = read_landmark_lines(args.landmarks_file)
-        return pairs, [lambda column, n=n, pair=pair: (args.landmarks_file, int(n), int(pair[column]), 0)
-                       for n, pair in zip(numbers, pairs)]
-    if args.landmarks_vts:
-        import numpy as np
+        from ..landmark_map import read_landmark_lines
 
+        pairs, numbers = read_landmark_lines(args.landmarks_file)
+        return pairs, ((args.landmarks_file,) * 2, np.stack([numbers, numbers], axis=1), 0)
+    if args.landmarks_vts:
         from ..ground_truth import read_vts_lines
 
         (a, lines_a), (b, lines_b) = (read_vts_lines(path, "landmark") for path in args.landmarks_vts)
         if len(a) != len(b):
             raise ParameterError(f"--landmarks-vts: {args.landmarks_vts[0]} has {len(a)} lines and "
                                  f"{args.landmarks_vts[1]} has {len(b)}; line k of each must be landmark k.")
-        pairs = np.stack([a, b], axis=1)
-        return pairs, [lambda column, row=row: (args.landmarks_vts[column],
-                                                int((lines_a, lines_b)[column][row]),
-                                                int(pairs[row, column]) + 1, 1) for row in range(len(pairs))]
-    return None, []
+        return np.stack([a, b], axis=1), (tuple(args.landmarks_vts), np.stack([lines_a, lines_b], axis=1), 1)
+    return None, None
 
 
 @contextmanager
-def _landmark_lines(lines):
+def _landmark_lines(pairs, origin):
     """Turn a :class:`~meshcorr.errors.LandmarkError` into an input error naming the file's line (exit 3)."""
     try:
         yield
     except LandmarkError as error:
-        if not lines:
+        if origin is None:
             raise
-        path, number, value, base = lines[error.row](error.column)
-        side = ("source", "target")[error.column]
+        files, lines, base = origin
+        row, column = error.row, error.column
+        value, side = int(pairs[row, column]) + base, ("source", "target")[column]
         if error.problem == "range":
             reason = (f"{side} vertex {value} is outside the {side} mesh's vertices "
                       f"{base}..{error.limit - 1 + base} ({'1-based, as in a .vts file' if base else '0-based'}).")
         elif error.problem == "repeat":
-            first_line = lines[error.first](0)[1]
-            reason = (f"source vertex {value} already has another target vertex on line {first_line}; "
-                      "give each source vertex one target vertex.")
+            reason = (f"source vertex {value} already has another target vertex on line "
+                      f"{lines[error.first, 0]}; give each source vertex one target vertex.")
         else:
             reason = (f"{side} vertex {value} lies on a component that was removed (--largest-component); "
                       "choose a vertex on the largest component.")
-        raise InputError(f"{path}, line {number}: {reason}") from None
+        raise InputError(f"{files[column]}, line {lines[row, column]}: {reason}") from None
 
 
 def _write_report(args, mapping, summary: dict) -> None:

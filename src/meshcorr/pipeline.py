@@ -25,6 +25,7 @@ import numpy as np
 from ._params import check_bool, check_choice, check_float, check_int, check_seed
 from ._threads import parallel_map
 from .anchors import EXACT_PAIRS, anchor_descriptors, embedding_neighbours, proximity_matching, select_anchors
+from .bijection import check_fixed_pairs, nearest_bijection
 from .curvature import curvature_disagreement
 from .errors import MeshWarning, ParameterError, PartialShapeWarning
 from .extremities import match_extremities, spectrum_extremities
@@ -110,7 +111,9 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
     anchor_weight : float
         alpha, weight of each anchor's geodesic term.
     bijective : bool
-        One-to-one map by linear assignment (equal vertex counts only).
+        One-to-one map by linear assignment (equal vertex counts only; each
+        landmark vertex given once): every target vertex exactly once
+        (:mod:`meshcorr.bijection`).
     largest_component : bool
         Map only the largest connected component of each mesh instead of
         raising on several components.
@@ -256,6 +259,8 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         shapes = pair_shapes(source, target, settings)
         src, tgt = as_meshes(*shapes)
         pairs = check_landmarks(landmarks, src, tgt)
+    if bijective and pairs is not None:  # named in the input's numbering
+        check_fixed_pairs(np.stack([src.kept[pairs[:, 0]], tgt.kept[pairs[:, 1]]], axis=1))
     if n_anchors > min(src.n_vertices, tgt.n_vertices):  # each anchor pairs two distinct vertices
         raise ParameterError(f"n_anchors={n_anchors} (--anchors) is more than the smaller shape's "
                              f"{min(src.n_vertices, tgt.n_vertices)} vertices; the paper's few anchors (3-10) "
@@ -339,6 +344,9 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
                 local_map = shell_refine(src, tgt, local_map, k=refine_k, landmarks=pairs, descriptors=described,
                                          orientation=choice.orientation, random_state=random_state)
         spectral_kept = False
+    if bijective:  # an unrefined start of the whole-map choice, or pinned landmarks, are not one-to-one
+        local_map = nearest_bijection(local_map, tgt.vertices, fixed=pairs)
+        other_map = None if other_map is None else nearest_bijection(other_map, tgt.vertices)
     icp, anchors = chosen.extra["icp"], chosen.extra["anchors"]
 
     full_map = np.full(src.n_original, -1, dtype=np.int64)

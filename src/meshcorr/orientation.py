@@ -44,8 +44,9 @@ same area, e.g. for a disc-like patch.
 
 A point cloud has no triangles: its normals are estimated, turned outwards
 and checked by :func:`meshcorr.normals.estimate_normals` (principal
-components of neighbourhoods, Hoppe et al.'s orientation propagation, the
-same volume test), and its vertex areas are those of its Laplacian
+components of neighbourhoods after Hoppe et al., turned outwards by
+visibility votes and a propagation along the neighbour graph, the same
+volume test), and its vertex areas are those of its Laplacian
 (:func:`meshcorr.laplacian.vertex_areas`); the score is then the same.
 """
 

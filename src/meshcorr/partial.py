@@ -20,11 +20,14 @@ that:
    those of the part that lie farther than :data:`BOUNDARY_BAND` x
    sqrt(area(P)) from its boundary (a cut makes new maxima of the average
    geodesic distance along it).
-2. **Tip assignments** (:func:`match_part_tips`): every injective assignment
-   of the part's tips to the whole's, of all of them or of all but one (a
-   tip of the part may have no counterpart), scored by the distortion of
-   their geodesic distances, each side divided by its own mean over the
-   assigned tips (the scale between part and whole is unknown).
+2. **Tip assignments** (:func:`match_part_tips`): a consensus search over
+   triangles of tips (after RANSAC): each triangle of the part's tips
+   against each triangle of the whole's whose sides agree up to a common
+   scale, the other tips joining where their distances agree too (tips of
+   either side may have no counterpart); the assignments with the most tips
+   win, ties broken by the distortion of their geodesic distances, each
+   side divided by its own sum (the scale between part and whole is
+   unknown).
 3. **Dense maps** (:func:`landmark_map`): each assignment becomes a map by
    nearest geodesic-distance descriptors, then
    :func:`geodesic_refine` re-takes :data:`N_REFINE_LANDMARKS`

@@ -192,7 +192,8 @@ def validate_cloud(points, *, min_vertices: int = 3, largest_component: bool = F
     leave input points without an image in the map), and one connected
     cluster in the graph of the :data:`N_NEIGHBORS` nearest points (or only
     its largest cluster kept with ``largest_component``), with at least
-    ``min_vertices`` points. A flat cloud is accepted (like a flat mesh, its
+    ``min_vertices`` points, and a cloud that does not lie mostly on lines
+    (a sampled curve or wireframe: :func:`_check_curves`). A flat cloud is accepted (like a flat mesh, its
     outside is then undefined: :mod:`meshcorr.normals` says so).
 
     Parameters

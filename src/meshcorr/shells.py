@@ -47,8 +47,11 @@ For :math:`k = k_0 < \\dots < K`, given the current map :math:`T`:
 A last step does the same with the coordinates themselves (:math:`k = K`,
 no low pass). Unlike Smooth Shells this uses hard nearest-neighbour
 assignments (no soft correspondences, no Markov-chain search for the
-start): the start is the map the pipeline chose, and this stage only
-refines it. The normals keep facing surfaces apart (an arm against the
+start): each start is a candidate map of the pipeline's whole-map choice
+(every candidate that keeps the orientation is refined here before the
+choice, :func:`meshcorr.selection.shell_candidates`), and this stage only
+refines it. The soft correspondences were measured and made no difference
+(``benchmarks/RESULTS-robustness-trials.md``). The normals keep facing surfaces apart (an arm against the
 body); the spectral term keeps the map on the part ZoomOut put it on.
 
 A source that is a *part* of the target (``part_fraction`` r, the partial

@@ -142,7 +142,8 @@ def add_parser(sub) -> None:
     s.add_argument("--samples", type=int, default=N_SAMPLES, dest="n_samples", metavar="N",
                    help=f"Nystrom samples (landmark vertices) of the scalable mode (default: {N_SAMPLES})")
     s.add_argument("--scalable-above", type=int, default=SCALABLE_ABOVE, metavar="N",
-                   help=f"--mode auto: the scalable mode from this many vertices on (default: {SCALABLE_ABOVE})")
+                   help=f"--mode auto: the scalable mode when the larger mesh has more than this many vertices "
+                        f"(default: {SCALABLE_ABOVE})")
     s.add_argument("--max-memory", metavar="SIZE", default=None,
                    help="memory the dense mode may use, e.g. 4GiB or 500MB; larger inputs are refused "
                         "(default: 80%% of the memory available)")

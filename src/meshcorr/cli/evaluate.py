@@ -6,6 +6,8 @@ import argparse
 import json
 import sys
 
+import numpy as np
+
 from ..geodesics import GEODESIC_METHODS
 
 HELP = "score a vertex map against ground truth (geodesic error)"
@@ -31,6 +33,11 @@ Ground truth (--gt):
 --sym gives the left/right mirrored truth the same way; with a .vts pair in
 --gt, one file (B.sym.vts) is enough. The map is then called flipped when it
 is closer to the mirrored truth than to the direct one.
+
+TARGET must be one connected surface (geodesic errors); for a map made with
+'meshcorr match --largest-component', pass --largest-component here too: the
+errors are measured on TARGET's largest piece (map entries and true vertices
+elsewhere are counted as misses / left out, and said so).
 """
 
 
@@ -50,7 +57,10 @@ def add_parser(sub) -> None:
     p.add_argument("--thresholds", default="0.05,0.1,0.25",
                    help="comma-separated normalised errors to report (default: 0.05,0.1,0.25)")
     p.add_argument("--curve", metavar="PNG",
-                   help="also save the cumulative error curve (needs meshcorr[plot])")
+                   help="also save the cumulative error curve as a .png (needs meshcorr[plot])")
+    p.add_argument("--largest-component", action="store_true",
+                   help="measure on TARGET's largest connected piece (default: a TARGET of several "
+                        "pieces is refused)")
     p.add_argument("--json", action="store_true", help="print the report as JSON on stdout")
     p.set_defaults(run=run)
 
@@ -75,39 +85,118 @@ def _sym_spec(gt: list[str], sym: list[str]) -> list[str]:
     return sym
 
 
+def _progress_cache(method: str, progress):
+    """A :class:`meshcorr.evaluation.GeodesicCache` whose solves report ``progress``.
+
+    The geodesic rows are solved in blocks; on a large TARGET with a dense truth they take
+    minutes, which ran without a line on the terminal.
+    """
+    from ..evaluation import GeodesicCache
+
+    class ProgressCache(GeodesicCache):
+        def precompute(self, mesh, vertices) -> None:
+            vertices = np.unique(np.asarray(vertices, dtype=np.int64))
+            if progress is None or vertices.size <= _BLOCK:
+                return super().precompute(mesh, vertices)
+            starts = range(0, vertices.size, _BLOCK)
+            for number, start in enumerate(starts):
+                progress("geodesic errors", number, len(starts))
+                super().precompute(mesh, vertices[start:start + _BLOCK])
+            progress("geodesic errors", len(starts), len(starts))
+
+    return ProgressCache(method)
+
+
+#: Source vertices solved between two progress reports.
+_BLOCK = 256
+
+
+def _restrict_to_piece(target, mapping: np.ndarray, truths: list, quiet: bool, where: str):
+    """The map and truths renumbered onto TARGET's kept piece (``target.kept``): map entries elsewhere
+    become -1 (misses), truth pairs elsewhere are left out; each change is said on stderr."""
+    from ..ground_truth import GroundTruth
+
+    new_index = np.full(target.n_original, -1, dtype=np.int64)
+    new_index[target.kept] = np.arange(target.n_vertices)
+    mapped = mapping >= 0
+    off = int((mapped & (new_index[np.maximum(mapping, 0)] < 0)).sum())
+    mapping = np.where(mapped, new_index[np.maximum(mapping, 0)], -1)
+    if not quiet:
+        print(f"meshcorr: measuring on the largest piece of {where}: {target.n_vertices} of its "
+              f"{target.n_original} vertices; {off} map entries point elsewhere (counted as misses)",
+              file=sys.stderr)
+    restricted = []
+    for truth in truths:
+        if truth is None:
+            restricted.append(None)
+            continue
+        keep = new_index[truth.target] >= 0
+        if not keep.any():
+            from ..errors import InputError
+
+            raise InputError(f"No ground-truth pair of {truth.description or '--gt'} lies on the largest "
+                             f"piece of {where}: there is nothing to score there.")
+        if not keep.all() and not quiet:
+            print(f"meshcorr: {int((~keep).sum())} of {keep.size} ground-truth pairs of "
+                  f"{truth.description or '--gt'} lie on other pieces: left out", file=sys.stderr)
+        restricted.append(GroundTruth(truth.source[keep], new_index[truth.target[keep]], truth.description))
+    return mapping, restricted
+
+
 def run(args) -> int:
-    from ..errors import ParameterError
+    from ..errors import InputError
     from ..evaluation import cumulative_curve, evaluate_map, map_quality, scalar_summary
     from ..ground_truth import load_ground_truth
     from ..io import check_outputs, read_mesh
     from ._mapfile import read_checked_map
+    from ._progress import StageProgress
     from ..mesh import Mesh, as_mesh
+    from .show import check_png, one_surface, truth_inputs
 
     thresholds = _thresholds(args.thresholds)
     if args.curve:
         from ..plots import require_matplotlib
 
-        check_outputs({"--curve": args.curve}, {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map})
+        check_png(args.curve, "--curve")
+        check_outputs({"--curve": args.curve},
+                      {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map,
+                       **truth_inputs(args.gt), **truth_inputs(args.sym)})
         require_matplotlib()
     source = read_mesh(args.source, name=f"SOURCE {args.source}")
     n_source = len(source[0])
-    target = as_mesh(args.target, name=f"TARGET {args.target}")
-    mapping = read_checked_map(args.map, n_source, target.n_vertices)
-    truth = load_ground_truth(args.gt, n_source=n_source, n_target=target.n_vertices)
+    if args.largest_component:
+        target = as_mesh(args.target, name=f"TARGET {args.target}", largest_component=True)
+    else:
+        target = one_surface(args.target, "TARGET", "Geodesic errors need one connected surface: pass "
+                             "--largest-component to measure on its largest piece (as 'meshcorr match "
+                             "--largest-component' maps onto it).")
+    n_target = target.n_original if args.largest_component else target.n_vertices
+    mapping = read_checked_map(args.map, n_source, n_target)
+    if not (mapping >= 0).any():
+        raise InputError(f"{args.map} maps no SOURCE vertex (every entry is -1): there is nothing to "
+                         "score. Check that it is the map you meant.")
+    truth = load_ground_truth(args.gt, n_source=n_source, n_target=n_target)
     sym = (load_ground_truth(_sym_spec(args.gt, args.sym), n_source=n_source,
-                             n_target=target.n_vertices) if args.sym else None)
+                             n_target=n_target) if args.sym else None)
+    if target.n_vertices < n_target:
+        mapping, (truth, sym) = _restrict_to_piece(target, mapping, [truth, sym], args.quiet, args.target)
+        if not (mapping >= 0).any():
+            raise InputError(f"{args.map} maps no SOURCE vertex onto the largest piece of {args.target}: "
+                             "there is nothing to score there.")
+    progress = None if args.quiet else StageProgress(sys.stderr, delay=0.0 if args.verbose else 1.0,
+                                                     label=f"{args.map} on {args.target}")
     report = evaluate_map(target, mapping, truth, sym_truth=sym, thresholds=thresholds,
-                          geodesic=args.geodesic)
-    if args.curve:
+                          geodesic=args.geodesic, cache=_progress_cache(args.geodesic, progress))
+    summary = scalar_summary(report)
+    summary.update(map_quality(Mesh(*source, name=args.source), target, mapping))
+    summary.update(source=args.source, target=args.target, map=args.map, geodesic=args.geodesic)
+    if args.curve:  # the last work: an interrupt before it leaves no curve behind
         from ..plots import plot_cumulative_curves
 
         curves = {"direct truth": cumulative_curve(report["errors"])}
         if sym is not None:
             curves["mirrored truth"] = cumulative_curve(report["sym_errors"])
         plot_cumulative_curves(args.curve, curves, title=f"{args.map} on {args.target}")
-    summary = scalar_summary(report)
-    summary.update(map_quality(Mesh(*source, name=args.source), target, mapping))
-    summary.update(source=args.source, target=args.target, map=args.map, geodesic=args.geodesic)
     if args.json:
         json.dump(summary, sys.stdout, indent=2)
         sys.stdout.write("\n")

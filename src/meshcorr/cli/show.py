@@ -48,7 +48,62 @@ def add_camera_arguments(p) -> None:
     p.add_argument("--azim", type=float, default=-60.0, help="camera azimuth, degrees (default -60)")
     p.add_argument("--up", choices=("x", "y", "z"), default="z",
                    help="world axis drawn pointing up (default: z)")
-    p.add_argument("--dpi", type=int, default=100, help="resolution (default 100)")
+    p.add_argument("--dpi", type=dpi, default=100,
+                   help=f"resolution, dots per inch, {MIN_DPI}..{MAX_DPI} (default 100)")
+
+
+#: The ``--dpi`` range: below it a picture is a few pixels wide, above it tens of thousands.
+MIN_DPI, MAX_DPI = 10, 1000
+
+
+def dpi(text: str) -> int:
+    """``--dpi``: an integer in ``[MIN_DPI, MAX_DPI]`` (0 or less failed inside matplotlib, and a huge
+    value ran out of memory with a message about n x n matrices)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if not MIN_DPI <= value <= MAX_DPI:
+        raise argparse.ArgumentTypeError(f"expected dots per inch from {MIN_DPI} to {MAX_DPI}, got {value}")
+    return value
+
+
+def check_png(path: str, what: str = "-o") -> None:
+    """Refuse a picture path that does not end in .png: the picture is always a PNG (a .jpg or .pdf
+    name got PNG bytes, and '-' a file named '-')."""
+    from ..errors import ParameterError
+
+    if not str(path).lower().endswith(".png"):
+        raise ParameterError(f"Cannot write {what} {path}: the picture is a PNG; give a file name ending "
+                             "in .png.")
+
+
+def truth_inputs(specs) -> dict:
+    """The ground-truth files of ``--gt`` / ``--sym`` as named inputs, so that no output replaces them."""
+    return {f"--gt {spec}": spec for spec in specs or () if spec != "identity"}
+
+
+def one_surface(path, what: str, why: str, name: str | None = None):
+    """The mesh at ``path`` as a validated Mesh; several pieces are refused with ``why`` (what needs one
+    surface) instead of validation's advice to pass --largest-component, which the command does not take.
+
+    ``what`` names the argument ("TARGET"); ``path`` may also be a ``(vertices, faces)`` pair, then
+    ``name`` is its file.
+    """
+    from ..errors import MeshError
+    from ..mesh import as_mesh
+
+    name = name or str(path)
+    try:
+        return as_mesh(path, name=name)
+    except MeshError as error:
+        try:
+            whole = as_mesh(path, name=name, largest_component=True)
+        except MeshError:
+            raise error from None
+        raise MeshError(f"{what} {name} is not one connected surface: its largest piece holds "
+                        f"{whole.n_vertices} of its {whole.n_original} vertices (the others are other "
+                        f"pieces or vertices used by no face). {why}") from None
 
 
 def dense_truth(spec, n_source: int, n_target: int) -> np.ndarray:
@@ -69,12 +124,19 @@ def run(args) -> int:
     from ..viz.figures import correspondence_figure
     from ..io import check_outputs
 
-    check_outputs({"-o": args.output}, {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map})
+    check_png(args.output)
+    check_outputs({"-o": args.output}, {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map,
+                                        **truth_inputs(args.gt)})
     require_matplotlib()
     if args.error and not args.gt:
         raise ParameterError("--error colours SOURCE by its error against the ground truth: give --gt GT.")
     source = read_mesh(args.source, name=args.source)
-    target = read_mesh(args.target, name=args.target)
+    if args.gt:  # the errors against the truth are geodesic distances on TARGET
+        mesh = one_surface(args.target, "TARGET", "The geodesic errors of --gt need one connected "
+                           "surface: draw the map without --gt, or remove the other pieces first.")
+        target = (mesh.vertices, mesh.faces)
+    else:
+        target = read_mesh(args.target, name=args.target)
     mapping = read_checked_map(args.map, len(source[0]), len(target[0]))
     truth = dense_truth(args.gt, len(source[0]), len(target[0])) if args.gt else None
     info = correspondence_figure(source, target, mapping, args.output, truth=truth,

@@ -160,7 +160,7 @@ def run(args) -> int:
         check_png(args.curve, "--curve")
         check_outputs({"--curve": args.curve},
                       {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map,
-                       **truth_inputs(args.gt), **truth_inputs(args.sym)})
+                       **truth_inputs(args.gt), **truth_inputs(args.sym, "--sym")})
         require_matplotlib()
     source = read_mesh(args.source, name=f"SOURCE {args.source}")
     n_source = len(source[0])

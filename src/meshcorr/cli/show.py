@@ -78,9 +78,9 @@ def check_png(path: str, what: str = "-o") -> None:
                              "in .png.")
 
 
-def truth_inputs(specs) -> dict:
+def truth_inputs(specs, flag: str = "--gt") -> dict:
     """The ground-truth files of ``--gt`` / ``--sym`` as named inputs, so that no output replaces them."""
-    return {f"--gt {spec}": spec for spec in specs or () if spec != "identity"}
+    return {f"{flag} {spec}": spec for spec in specs or () if spec != "identity"}
 
 
 def one_surface(path, what: str, why: str, name: str | None = None):

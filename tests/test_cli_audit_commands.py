@@ -1,0 +1,161 @@
+"""An audit of the commands other than match and batch: show, transfer, evaluate, texture, fmap,
+embed, bench and cache. Each test is a defect found by using the command as a new user would:
+bad input or option values get one line and the exit code of the README, outputs never replace
+an input, an interrupted run leaves no output, long work says how far it is.
+"""
+
+import json
+
+import numpy as np
+import pytest
+import trimesh
+
+from meshcorr import datasets as ds
+from meshcorr.cli import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_USAGE, main
+
+
+def _save(path, vertices, faces):
+    trimesh.Trimesh(vertices, faces, process=False).export(path)
+    return str(path)
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    """A tube, a rigid re-indexed copy, the true map; a target of two pieces and its map."""
+    folder = tmp_path_factory.mktemp("audit")
+    shape = ds.tube(n_along=22, n_around=10)
+    copy, truth = ds.rigid_copy(shape, scale=0.5, random_state=2)
+    n = shape.n_vertices
+    two = _save(folder / "two_pieces.off", np.vstack([copy.vertices, copy.vertices + 10.0]),
+                np.vstack([copy.faces, copy.faces + n]))
+    paths = {
+        "src": _save(folder / "source.off", shape.vertices, shape.faces),
+        "tgt": _save(folder / "target.off", copy.vertices, copy.faces),
+        "two": two,
+        "map": str(folder / "map.txt"),
+        "off_by_one": str(folder / "off_by_one.txt"),
+        "unmapped": str(folder / "unmapped.txt"),
+    }
+    np.savetxt(paths["map"], truth, fmt="%d")
+    np.savetxt(paths["off_by_one"], (truth + 1) % n, fmt="%d")
+    np.savetxt(paths["unmapped"], np.full(n, -1), fmt="%d")
+    return folder, paths, truth
+
+
+def _run(args, capsys):
+    code = main(args)
+    out, err = capsys.readouterr()
+    assert "Traceback" not in err and "internal error" not in err
+    return code, out, err
+
+
+# ---------------------------------------------------------------- show and embed: pictures
+
+
+def test_show_refuses_to_write_over_a_ground_truth_file(files, tmp_path, capsys):
+    _, p, _ = files
+    truth = tmp_path / "truth.png"  # a ground-truth file that happens to be named like a picture
+    truth.write_text(open(p["map"]).read())
+    before = truth.read_bytes()
+    code, _, err = _run(["show", p["src"], p["tgt"], p["map"], "--gt", str(truth), "-o", str(truth)], capsys)
+    assert code == EXIT_USAGE and "is the input --gt" in err
+    assert truth.read_bytes() == before
+
+
+@pytest.mark.parametrize("command", ["show", "embed"])
+def test_pictures_are_png_files_and_dpi_is_checked(files, tmp_path, capsys, command):
+    _, p, _ = files
+    inputs = [p["src"], p["tgt"], p["map"]] if command == "show" else [p["src"]]
+    code, _, err = _run([command, *inputs, "-o", str(tmp_path / "picture.jpg")], capsys)
+    assert code == EXIT_USAGE and "give a file name ending in .png" in err
+    assert not (tmp_path / "picture.jpg").exists()  # was a PNG under a .jpg name
+    for dpi in ("0", "-5", "100000"):  # were an internal error, and 'out of memory ... n x n matrices'
+        with pytest.raises(SystemExit) as exit_:
+            main([command, *inputs, "-o", str(tmp_path / "picture.png"), "--dpi", dpi])
+        assert exit_.value.code == EXIT_USAGE
+        assert "argument --dpi: expected dots per inch from 10 to 1000" in capsys.readouterr().err
+
+
+def test_show_with_truth_on_a_target_of_two_pieces_names_a_fix_it_has(files, tmp_path, capsys):
+    _, p, truth = files
+    code, _, err = _run(["show", p["src"], p["two"], p["map"], "--gt", p["map"],
+                         "-o", str(tmp_path / "s.png")], capsys)
+    assert code == EXIT_INPUT and "is not one connected surface" in err and "without --gt" in err
+    assert "--largest-component" not in err  # show has no such option
+
+
+def test_embed_largest_component_memory_and_small_mesh(files, tmp_path, capsys):
+    _, p, _ = files
+    out = tmp_path / "e.png"
+    code, _, err = _run(["embed", p["two"], "-o", str(out)], capsys)
+    assert code == EXIT_INPUT and "--largest-component" in err  # the advice names an option embed has
+    code, _, err = _run(["embed", p["two"], "-o", str(out), "--largest-component"], capsys)
+    assert code == 0 and out.is_file() and "largest piece" in err
+    code, _, err = _run(["embed", p["src"], "-o", str(tmp_path / "m.png"), "--max-memory", "1MiB"], capsys)
+    assert code == EXIT_USAGE and "Decimate the mesh" in err and not (tmp_path / "m.png").exists()
+    tiny = _save(tmp_path / "tet.off", np.eye(4, 3), np.array([[0, 1, 2], [0, 3, 1], [0, 2, 3], [1, 3, 2]]))
+    code, _, err = _run(["embed", tiny, "-o", str(out)], capsys)
+    assert code == EXIT_INPUT and err.startswith(f"meshcorr: error: {tiny} has 4 vertices")  # was 'mesh'
+
+
+# ---------------------------------------------------------------- evaluate
+
+
+def test_evaluate_curve_never_replaces_a_truth_file(files, tmp_path, capsys):
+    _, p, _ = files
+    for option in ("--gt", "--sym"):
+        truth = tmp_path / f"truth{option}.png"
+        truth.write_text(open(p["map"]).read())
+        before = truth.read_bytes()
+        extra = ["--gt", p["map"], "--sym", str(truth)] if option == "--sym" else ["--gt", str(truth)]
+        code, _, err = _run(["evaluate", p["src"], p["tgt"], p["map"], *extra, "--curve", str(truth)], capsys)
+        assert code == EXIT_USAGE and f"is the input {option}" in err
+        assert truth.read_bytes() == before
+    code, _, err = _run(["evaluate", p["src"], p["tgt"], p["map"], "--gt", p["map"],
+                         "--curve", str(tmp_path / "c.pdf")], capsys)
+    assert code == EXIT_USAGE and ".png" in err
+
+
+def test_evaluate_a_map_that_maps_nothing_is_bad_data(files, capsys):
+    _, p, _ = files
+    code, _, err = _run(["evaluate", p["src"], p["tgt"], p["unmapped"], "--gt", p["map"]], capsys)
+    assert code == EXIT_INPUT and "maps no SOURCE vertex" in err
+
+
+def test_evaluate_largest_component(files, capsys):
+    _, p, truth = files
+    args = ["evaluate", p["src"], p["two"], p["map"], "--gt", p["map"]]
+    code, _, err = _run(args, capsys)
+    assert code == EXIT_INPUT and "pass --largest-component" in err
+    code, out, err = _run(args + ["--largest-component", "--json"], capsys)
+    assert code == 0 and "largest piece" in err
+    report = json.loads(out)
+    assert report["n_points"] == truth.size and report["mean_error"] == pytest.approx(0.0)
+
+
+def test_evaluate_reports_progress_of_the_geodesic_solves(files, capsys, monkeypatch):
+    import meshcorr.cli.evaluate as evaluate
+
+    _, p, _ = files
+    monkeypatch.setattr(evaluate, "_BLOCK", 16)
+    code, _, err = _run(["evaluate", p["src"], p["tgt"], p["off_by_one"], "--gt", p["map"], "-v"], capsys)
+    assert code == 0 and "[geodesic errors] 100%" in err
+    code, _, err = _run(["evaluate", p["src"], p["tgt"], p["off_by_one"], "--gt", p["map"], "-q"], capsys)
+    assert code == 0 and err == ""
+
+
+def test_evaluate_interrupted_leaves_no_curve(files, tmp_path, capsys, monkeypatch):
+    pytest.importorskip("matplotlib")
+    import meshcorr.evaluation
+
+    _, p, _ = files
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(meshcorr.evaluation, "map_quality", interrupted)
+    curve = tmp_path / "curve.png"
+    code, _, err = _run(["evaluate", p["src"], p["tgt"], p["map"], "--gt", p["map"], "--curve", str(curve)],
+                        capsys)
+    assert code == EXIT_INTERRUPTED and err.strip() == "meshcorr: interrupted"
+    assert not curve.exists()

@@ -159,3 +159,115 @@ def test_evaluate_interrupted_leaves_no_curve(files, tmp_path, capsys, monkeypat
                         capsys)
     assert code == EXIT_INTERRUPTED and err.strip() == "meshcorr: interrupted"
     assert not curve.exists()
+
+
+# ---------------------------------------------------------------- transfer
+
+
+def test_transfer_attribute_file_that_cannot_be_used_is_bad_data(files, tmp_path, capsys):
+    _, p, truth = files
+    n = truth.size
+    text = tmp_path / "words.npy"
+    np.save(text, np.array(["a"] * n))  # was an internal error (exit 1)
+    short = tmp_path / "short.txt"
+    np.savetxt(short, np.zeros(3))  # was a usage error (exit 2)
+    out = tmp_path / "t.ply"
+    for attribute, message in ((text, "not a table of numbers"), (short, "expected one row per target vertex")):
+        code, _, err = _run(["transfer", p["src"], p["tgt"], p["map"], "--attribute", str(attribute),
+                             "-o", str(out)], capsys)
+        assert code == EXIT_INPUT and message in err
+    assert not out.exists()
+
+
+# ---------------------------------------------------------------- texture and fmap
+
+
+@pytest.fixture(scope="module")
+def textured(files):
+    """TARGET as an OBJ with UVs, written by trimesh: material.obj names material.mtl and material_0.png."""
+    from PIL import Image
+
+    folder, p, _ = files
+    copy = trimesh.load(p["tgt"], process=False)
+    uv = (copy.vertices[:, :2] - copy.vertices[:, :2].min(axis=0)) / np.ptp(copy.vertices[:, :2], axis=0)
+    (folder / "tex").mkdir()
+    obj = folder / "tex" / "target.obj"
+    trimesh.Trimesh(copy.vertices, copy.faces, process=False,
+                    visual=trimesh.visual.TextureVisuals(uv=uv, image=Image.new("RGB", (8, 8), (9, 90, 200)))
+                    ).export(obj)
+    assert (folder / "tex" / "material.mtl").is_file()
+    return obj
+
+
+def test_texture_never_replaces_the_targets_material_file(files, textured, capsys):
+    _, p, _ = files
+    mtl = textured.parent / "material.mtl"
+    before = mtl.read_bytes()
+    code, _, err = _run(["texture", p["src"], str(textured), p["map"], "-o", str(textured.parent / "material.obj"),
+                         "-k", "10"], capsys)
+    assert code == EXIT_USAGE and "is the input TARGET's material" in err
+    assert mtl.read_bytes() == before and not (textured.parent / "material.obj").exists()
+
+
+def test_texture_writes_all_three_files_or_none(files, textured, tmp_path, capsys, monkeypatch):
+    import meshcorr.io
+    from meshcorr.errors import OutputError
+
+    _, p, _ = files
+    real = meshcorr.io.atomic_write
+    calls = []
+
+    def third_write_fails(path, writer):
+        calls.append(path)
+        if len(calls) == 3:
+            raise OutputError(f"Cannot write {path}: no space left on device.")
+        return real(path, writer)
+
+    monkeypatch.setattr("meshcorr.io.atomic_write", third_write_fails)
+    code, _, err = _run(["texture", p["src"], str(textured), p["map"], "-o", str(tmp_path / "out.obj"), "-k", "10"],
+                        capsys)
+    assert code == EXIT_USAGE and len(calls) == 3 and "no space left" in err
+    assert sorted(f.name for f in tmp_path.iterdir()) == []  # the image and the .mtl were left behind
+    monkeypatch.undo()
+    code, _, err = _run(["texture", p["src"], str(textured), p["map"], "-o", str(tmp_path / "out.obj"), "-k", "10"],
+                        capsys)
+    assert code == 0 and "wrote" in err and len(list(tmp_path.iterdir())) == 3
+
+
+@pytest.mark.parametrize("command", ["fmap", "texture"])
+def test_map_commands_refuse_a_map_that_maps_nothing_and_name_their_own_fix(files, textured, tmp_path, capsys,
+                                                                             command):
+    _, p, _ = files
+    target = str(textured) if command == "texture" else p["tgt"]
+    out = str(tmp_path / ("o.npz" if command == "fmap" else "o.obj"))
+    code, _, err = _run([command, p["src"], target, p["unmapped"], "-o", out, "-k", "10"], capsys)
+    assert code == EXIT_INPUT and "maps no SOURCE vertex" in err  # was a zero matrix / UVs all (0, 0)
+    two = [p["src"], p["two"], p["map"]] if command == "fmap" else [p["two"], target, p["map"]]
+    code, _, err = _run([command, *two, "-o", out, "-k", "10"], capsys)
+    assert code == EXIT_INPUT and "is not one connected surface" in err and "--largest-component" not in err
+    assert not list(tmp_path.iterdir())
+
+
+def test_fmap_seed_stdout_and_bad_functional_map_files(files, tmp_path, capsys):
+    _, p, truth = files
+    a, b = p["src"], p["tgt"]
+    with pytest.raises(SystemExit) as exit_:  # was an internal error
+        main(["fmap", a, b, p["map"], "-o", str(tmp_path / "f.npz"), "--seed", "-1"])
+    assert exit_.value.code == EXIT_USAGE and "--seed: expected an integer >= 0" in capsys.readouterr().err
+    good = tmp_path / "f.npz"
+    code, _, err = _run(["fmap", a, b, p["map"], "-o", str(good), "-k", "20"], capsys)
+    assert code == 0 and "wrote" in err
+    code, out, _ = _run(["fmap", a, b, "--to-map", str(good), "-o", "-"], capsys)
+    assert code == 0 and np.array_equal(np.array(out.split(), dtype=np.int64), truth)
+    assert not (tmp_path / "-").exists()  # was a file named '-'
+    arrays = dict(np.load(good))
+    npy = tmp_path / "plain.npz"
+    np.save(tmp_path / "plain.npy", arrays["C"])
+    (tmp_path / "plain.npy").rename(npy)  # a .npy under a .npz name: was an internal error
+    np.savez(tmp_path / "nan.npz", **{**arrays, "C": arrays["C"] * np.nan})  # was a usage error (exit 2)
+    np.savez(tmp_path / "text.npz", **{**arrays, "C": np.full(arrays["C"].shape, "x")})  # an internal error
+    for bad, message in ((npy, "it is no .npz archive"), (tmp_path / "nan.npz", "NaN"),
+                         (tmp_path / "text.npz", "could not convert"), (p["src"], "it is no .npz archive")):
+        code, _, err = _run(["fmap", a, b, "--to-map", str(bad), "-o", str(tmp_path / "m.txt")], capsys)
+        assert code == EXIT_INPUT and message in err and "allow_pickle" not in err
+        assert not (tmp_path / "m.txt").exists()

@@ -6,6 +6,9 @@ Both commands read SOURCE, TARGET and MAP like ``meshcorr transfer``.
 from __future__ import annotations
 
 import argparse
+import sys
+
+from .match import seed
 
 TEXTURE_HELP = "carry TARGET's UV atlas and texture onto SOURCE through a precise map; write an OBJ"
 FMAP_HELP = "export the map's functional map in Laplace-Beltrami bases (.npz), or import one as a map"
@@ -24,7 +27,8 @@ of a TARGET function to those of its pull-back on SOURCE, written with both
 bases, eigenvalues and masses (each mesh scaled to unit area) to OUT.npz.
 In pyFM's naming MAP is p2p_21 and C is FM_12 with mesh 1 = TARGET and mesh
 2 = SOURCE. --to-map FMAP.npz reads such a file and writes the vertex map
-instead (the nearest TARGET row of Phi_S C for each SOURCE vertex).
+instead (the nearest TARGET row of Phi_S C for each SOURCE vertex; -o - writes
+it to stdout).
 """
 
 
@@ -46,7 +50,8 @@ def add_parser(sub) -> None:
                                             "or with --to-map the vertex map (.txt/.npy)")),
                   (("-k",), dict(type=int, default=30, help="basis size (30)")),
                   (("--to-map",), dict(metavar="FMAP.npz", help="import this functional map as a vertex map")),
-                  (("--seed",), dict(type=int, default=0, help="seed of the eigensolvers (0)"))]),
+                  (("--seed",), dict(type=seed, default=0,
+                                     help="seed of the eigensolvers, an integer >= 0 (0)"))]),
     }
     for name, (help_text, description, run, arguments) in commands.items():
         parser = sub.add_parser(name, help=help_text, description=description,
@@ -57,15 +62,83 @@ def add_parser(sub) -> None:
 
 
 def _inputs(args, target_mesh=None):
-    from ..mesh import as_mesh
+    from ..errors import InputError
     from ._mapfile import read_checked_map
+    from .show import one_surface
 
-    source = as_mesh(args.source, name=args.source)
-    target = as_mesh(target_mesh if target_mesh is not None else args.target, name=args.target)
+    why = (f"'meshcorr {args.command}' needs one Laplace-Beltrami basis per mesh, so one connected surface: "
+           "remove the other pieces first (e.g. MeshLab: Filters > Cleaning and Repairing > Remove Isolated "
+           "pieces) and map again.")
+    source = one_surface(args.source, "SOURCE", why)
+    target = one_surface(target_mesh if target_mesh is not None else args.target, "TARGET", why,
+                         name=args.target)
     mapping = None
     if args.map is not None:
         mapping = read_checked_map(args.map, source.n_vertices, target.n_vertices)
+        if not (mapping >= 0).any():  # its functional map was all zeros, its UVs all (0, 0)
+            raise InputError(f"{args.map} maps no SOURCE vertex (every entry is -1): there is nothing to "
+                             "carry. Check that it is the map you meant.")
     return source, target, mapping
+
+
+def _status(args, text: str) -> None:
+    if not args.quiet:
+        print(f"meshcorr: {text}", file=sys.stderr)
+
+
+def _texture_files(obj) -> dict:
+    """The files an OBJ's texture comes from: its .mtl files (``mtllib``) and their images (``map_*``).
+
+    They are inputs too: ``-o NAME.obj`` writes NAME.mtl and NAME_texture.png, which replaced TARGET's
+    own material file when the names met (e.g. -o material.obj next to trimesh's material.mtl).
+    """
+    from pathlib import Path
+
+    obj = Path(obj)
+    files = {}
+    try:
+        lines = obj.read_text(encoding="latin-1").splitlines()
+    except OSError:
+        return files
+    for line in lines:
+        if line.startswith("mtllib"):
+            for name in line.split()[1:]:
+                mtl = obj.parent / name
+                files[f"TARGET's material {mtl}"] = mtl
+                try:
+                    material = mtl.read_text(encoding="latin-1").splitlines()
+                except OSError:
+                    continue
+                for entry in material:
+                    fields = entry.split()
+                    if fields and fields[0].lower().startswith(("map_", "bump", "disp", "decal")) and len(fields) > 1:
+                        image = mtl.parent / fields[-1]
+                        files[f"TARGET's texture {image}"] = image
+    return files
+
+
+def _load_fmap(path, source, target):
+    """The functional map in ``path``, its vertex map for these meshes; a file that cannot be used is bad
+    input data (exit 3). (A .npy, or arrays of text, were internal errors; NaN values a usage error.)"""
+    import os
+    import zipfile
+
+    from ..errors import InputError, ParameterError
+    from ..fmap import FunctionalMap
+
+    if os.path.isfile(path) and not zipfile.is_zipfile(path):  # np.load read a .npy as one array, and
+        # any other file as a pickle, whose message suggested loading it unsafely
+        raise InputError(f"{path} is not a functional map file: it is no .npz archive. Give the .npz "
+                         "that 'meshcorr fmap SOURCE TARGET MAP -o OUT.npz' writes.")
+    fmap = FunctionalMap.load(path)
+    if fmap.source_basis.shape[0] != source.n_vertices or fmap.target_basis.shape[0] != target.n_vertices:
+        raise InputError(f"{path} was written for meshes of {fmap.source_basis.shape[0]} and "
+                         f"{fmap.target_basis.shape[0]} vertices, not these ({source.n_vertices}, "
+                         f"{target.n_vertices}).")
+    try:
+        return fmap.point_map()
+    except (ParameterError, TypeError, ValueError) as error:
+        raise InputError(f"{path}: {error}".rstrip(".") + ". Write it again with 'meshcorr fmap'.") from None
 
 
 def _check_outputs(args, outputs: dict) -> None:
@@ -81,35 +154,43 @@ def run_texture(args) -> int:
     from ..precise import precise_map
     from ..texture import read_textured_obj, transfer_uv, write_textured_obj
 
+    from ..io import check_outputs, staged_writes
+
     obj = Path(args.output)
-    _check_outputs(args, {"-o": obj, "its .mtl": obj.with_suffix(".mtl"),
-                          "its texture": obj.with_name(obj.stem + "_texture.png")})
+    inputs = {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map, **_texture_files(args.target)}
+    check_outputs({"-o": obj, "its .mtl": obj.with_suffix(".mtl"),
+                   "its texture": obj.with_name(obj.stem + "_texture.png")}, inputs)
     textured = read_textured_obj(args.target)
     source, target, mapping = _inputs(args, (textured.vertices, textured.faces))
     uv = transfer_uv(precise_map(source, target, mapping, k=args.k), textured)
-    write_textured_obj(args.output, source.vertices, source.faces, uv, textured.image,
-                       inputs=(args.source, args.target, args.map))
+    with staged_writes():  # the .obj, .mtl and image appear together, or none of them
+        obj, mtl, png = write_textured_obj(args.output, source.vertices, source.faces, uv, textured.image,
+                                           inputs=tuple(inputs.values()))
+    _status(args, f"wrote {obj}, {mtl.name} and {png.name} ({int((mapping >= 0).sum())}/{len(mapping)} "
+                  "source vertices mapped)")
     return 0
 
 
 def run_fmap(args) -> int:
-    from ..errors import InputError, ParameterError
-    from ..fmap import FunctionalMap, functional_map
+    from ..errors import ParameterError
+    from ..fmap import functional_map
     from ..io import write_map
 
     _check_outputs(args, {"-o": args.output})
     if (args.map is None) == (args.to_map is None):
         raise ParameterError("Give either MAP (to export its functional map) or --to-map FMAP.npz (to import one).")
+    if args.map is not None and not args.output.lower().endswith(".npz"):  # before the work, not after
+        raise ParameterError(f"Cannot write {args.output}: a functional map is written as .npz.")
     source, target, mapping = _inputs(args)
     if args.to_map:
-        fmap = FunctionalMap.load(args.to_map)
-        if fmap.source_basis.shape[0] != source.n_vertices or fmap.target_basis.shape[0] != target.n_vertices:
-            raise InputError(f"{args.to_map} was written for meshes of {fmap.source_basis.shape[0]} and "
-                                 f"{fmap.target_basis.shape[0]} vertices, not these ({source.n_vertices}, "
-                                 f"{target.n_vertices}).")
-        write_map(args.output, fmap.point_map())
+        mapping = _load_fmap(args.to_map, source, target)
+        if args.output == "-":  # stdout, as 'meshcorr match -o -' (it wrote a file named '-')
+            sys.stdout.write("".join(f"{value}\n" for value in mapping.tolist()))
+            sys.stdout.flush()
+        else:
+            write_map(args.output, mapping)
+            _status(args, f"wrote {args.output}: the vertex map of {args.to_map}")
         return 0
-    if not args.output.endswith(".npz"):
-        raise ParameterError(f"Cannot write {args.output}: a functional map is written as .npz.")
     functional_map(source, target, mapping, args.k, random_state=args.seed).save(args.output)
+    _status(args, f"wrote {args.output}: the {args.k} x {args.k} functional map of {args.map}")
     return 0

@@ -39,10 +39,29 @@ def add_parser(sub) -> None:
     p.set_defaults(run=run)
 
 
+def _read_attribute(args, vertices, faces):
+    """TARGET's values named by --attribute; a FILE that cannot be used is bad input data (exit 3).
+
+    (Its errors were usage errors, exit 2, and a .npy of text an internal error.)
+    """
+    from ..errors import InputError, ParameterError
+    from ..transfer import read_attribute
+
+    if args.attribute in ("colors", "parts", "xyz"):
+        return read_attribute(args.attribute, args.target, vertices, faces)
+    try:
+        return read_attribute(args.attribute, args.target, vertices, faces)
+    except ParameterError as error:
+        raise InputError(str(error)) from None
+    except (TypeError, ValueError) as error:  # e.g. a .npy of strings: its values are not numbers
+        raise InputError(f"--attribute {args.attribute}: not a table of numbers ({error}); give one number "
+                         "(a scalar field) or 3-4 colour channels (0-255) per TARGET vertex.") from None
+
+
 def run(args) -> int:
     from ..errors import ParameterError
     from ..io import read_mesh, staged_writes, write_mesh
-    from ..transfer import read_attribute, transfer_attribute, write_values
+    from ..transfer import transfer_attribute, write_values
     from ._mapfile import read_checked_map
     from ..io import check_outputs
 
@@ -57,7 +76,7 @@ def run(args) -> int:
         raise ParameterError(f"Cannot write {args.output}: SOURCE is a point cloud; its colours are written "
                              "as a .ply file of points.")
     mapping = read_checked_map(args.map, len(V1), len(V2))
-    values = read_attribute(args.attribute, args.target, V2, F2)
+    values = _read_attribute(args, V2, F2)
     colors, pulled = transfer_attribute(values, mapping, cmap=args.cmap)
     with staged_writes():
         write_mesh(args.output, V1, F1, vertex_colors=colors)

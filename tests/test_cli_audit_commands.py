@@ -271,3 +271,61 @@ def test_fmap_seed_stdout_and_bad_functional_map_files(files, tmp_path, capsys):
         code, _, err = _run(["fmap", a, b, "--to-map", str(bad), "-o", str(tmp_path / "m.txt")], capsys)
         assert code == EXIT_INPUT and message in err and "allow_pickle" not in err
         assert not (tmp_path / "m.txt").exists()
+
+
+# ---------------------------------------------------------------- bench and cache
+
+
+@pytest.fixture()
+def dataset(tmp_path):
+    """One class: a tube and a rigid, re-indexed copy, in the TOSCA layout."""
+    root = tmp_path / "data"
+    (root / "corres").mkdir(parents=True)
+    shape = ds.tube(n_along=12, n_around=8)
+    copy, truth = ds.rigid_copy(shape, scale=0.5, random_state=2)
+    for name, mesh, vts in (("tube0", shape, np.arange(shape.n_vertices)), ("tube1", copy, truth)):
+        _save(root / f"{name}.off", mesh.vertices, mesh.faces)
+        (root / "corres" / f"{name}.vts").write_text("".join(f"{i + 1}\n" for i in vts))
+    (root / "test_pairs.txt").write_text("tube0 tube1\n")
+    return root
+
+
+def test_bench_refuses_bad_method_options_before_any_run(dataset, tmp_path, capsys, monkeypatch):
+    import meshcorr.benchmark
+
+    def no_run(*args, **kwargs):
+        raise AssertionError("a method ran")
+
+    monkeypatch.setattr(meshcorr.benchmark, "run_method", no_run)
+    out = tmp_path / "out"
+    base = ["bench", str(dataset), "--out", str(out), "--no-plot", "-q"]
+    for option, message in ((["--set", "spectral:method=icp"], "use --methods"),  # ran icp, named spectral
+                            (["--set", "spectral:random_state=1"], "use --seed"),  # every pair failed
+                            (["--set", "spectral:nonsense=1"], "has no option 'nonsense'"),  # every pair failed
+                            (["--methods", "icp", "--set", "icp:k=5"], "has no option 'k'")):
+        code, _, err = _run([*base, *option], capsys)
+        assert code == EXIT_USAGE and message in err, err
+    for k in ("0", "11"):  # every pair failed, and the folder kept k as its setting
+        with pytest.raises(SystemExit) as exit_:
+            main([*base, "-k", k])
+        assert exit_.value.code == EXIT_USAGE and "-k: expected an integer from 2 to 10" in capsys.readouterr().err
+    assert not out.exists()
+    code, _, err = _run(["bench", str(dataset), "--out", str(dataset), "--no-plot", "-q"], capsys)
+    assert code == EXIT_USAGE and "is the dataset folder" in err
+    assert sorted(p.name for p in dataset.iterdir()) == ["corres", "test_pairs.txt", "tube0.off", "tube1.off"]
+
+
+def test_cache_clear_that_cannot_remove_a_file_is_one_line(tmp_path, capsys, monkeypatch):
+    from pathlib import Path
+
+    (tmp_path / ("a" * 64 + ".npz")).write_bytes(b"x")
+
+    def refused(self, missing_ok=False):
+        raise PermissionError(13, "Permission denied", str(self))
+
+    monkeypatch.setattr(Path, "unlink", refused)
+    code, _, err = _run(["cache", "clear", "--dir", str(tmp_path)], capsys)
+    assert code == EXIT_USAGE and "Cannot clear the cache folder" in err and "Permission denied" in err
+    monkeypatch.undo()
+    code, out, _ = _run(["cache", "info", "--dir", str(tmp_path / "none")], capsys)
+    assert code == 0 and "does not exist yet" in out

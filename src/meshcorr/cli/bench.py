@@ -41,18 +41,48 @@ def add_parser(sub) -> None:
                    help="a deterministic, class-stratified sample of N pairs (default: all)")
     p.add_argument("--out", default="bench-out", metavar="DIR", help="output folder (default: bench-out)")
     g = p.add_argument_group("method options")
-    g.add_argument("-k", type=int, default=None,
-                   help="eigenpairs, for spectral and shapiro-brady[-scaled] (default: each method's)")
+    g.add_argument("-k", type=k_value, default=None,
+                   help=f"eigenpairs, {K_RANGE[0]}..{K_RANGE[1]}, for spectral and shapiro-brady[-scaled] "
+                        "(default: each method's)")
     g.add_argument("--geodesic", choices=GEODESIC_METHODS, default=None,
                    help="geodesic solver of the spectral methods (default: each method's)")
     g.add_argument("--set", action="append", default=[], metavar="METHOD:KEY=VALUE",
-                   help="any option of one method, e.g. --set spectral:reorder=greedy (repeatable)")
+                   help="any option of one method, e.g. --set spectral:reorder=greedy (repeatable; "
+                        "the seed is --seed)")
     p.add_argument("--eval-geodesic", choices=GEODESIC_METHODS, default="heat",
                    help="geodesic solver of the evaluation (default: heat)")
     p.add_argument("--seed", type=seed, default=0, help="seed of the sample and of every method (default: 0)")
     p.add_argument("--retry-failed", action="store_true", help="run failed (pair, method) rows again")
     p.add_argument("--no-plot", action="store_true", help="do not draw curves.png")
     p.set_defaults(run=run)
+
+
+#: The eigenpairs the spectral methods take (meshcorr.match and shapiro-brady check the same range).
+K_RANGE = (2, 10)
+
+
+def k_value(text: str) -> int:
+    """``-k``: an integer in ``K_RANGE`` (out of it, every pair failed and the folder kept the setting)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if not K_RANGE[0] <= value <= K_RANGE[1]:
+        raise argparse.ArgumentTypeError(f"expected an integer from {K_RANGE[0]} to {K_RANGE[1]}, got {value}")
+    return value
+
+
+#: Keywords bench sets itself: --set must not give them (``method`` ran another method under this one's
+#: name; ``random_state`` and ``progress`` failed every pair).
+_RESERVED = {"method": "--methods", "random_state": "--seed", "progress": "-q", "source": "DATASET_DIR",
+             "target": "DATASET_DIR"}
+
+
+def _options_of(method: str) -> tuple[str, ...]:
+    """The keywords ``--set METHOD:KEY=VALUE`` may give ``method`` (an unknown one failed every pair)."""
+    from ..methods import applicable
+
+    return tuple(name for name in applicable(method) if name not in _RESERVED and name != "n_landmarks")
 
 
 def _value(text: str):
@@ -84,6 +114,12 @@ def method_options(methods: list[str], k, geodesic, settings: list[str]) -> dict
             raise ParameterError(f"--set takes METHOD:KEY=VALUE, e.g. spectral:reorder=greedy; got {item!r}.")
         if method not in options:
             raise ParameterError(f"--set {item!r} names method {method!r}, which is not in --methods.")
+        if key in _RESERVED:
+            raise ParameterError(f"--set {item!r}: bench sets {key!r} itself; use {_RESERVED[key]} instead.")
+        allowed = _options_of(method)
+        if key not in allowed:
+            raise ParameterError(f"--set {item!r}: the method {method!r} has no option {key!r}. Its options are: "
+                                 f"{', '.join(allowed)}.")
         options[method][key] = _value(value)
     return {m: o for m, o in options.items() if o}
 
@@ -111,10 +147,16 @@ class PairProgress:
 
 
 def run(args) -> int:
+    import os
+
     from ..benchmark import check_methods, run_benchmark, summarize, write_summary
+    from ..errors import ParameterError
 
     methods = check_methods([m.strip() for m in args.methods.split(",") if m.strip()])
     options = method_options(methods, args.k, args.geodesic, args.set)
+    if os.path.isdir(args.dataset) and os.path.realpath(args.out) == os.path.realpath(args.dataset):
+        raise ParameterError(f"--out {args.out} is the dataset folder DATASET_DIR: the results would be mixed "
+                             "with its meshes. Give another --out folder.")
     if not args.no_plot:
         from ..plots import require_matplotlib
 

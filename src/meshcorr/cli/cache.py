@@ -16,7 +16,9 @@ folder: $MESHCORR_CACHE, else $XDG_CACHE_HOME/meshcorr, else ~/.cache/meshcorr.
 def add_parser(sub) -> None:
     p = sub.add_parser("cache", help=HELP, description=DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("action", choices=("info", "clear"))
+    p.add_argument("action", choices=("info", "clear"),
+                   help="info: print the folder, its prepared shapes and their size; clear: delete them "
+                        "(only meshcorr's own cache files; other files stay)")
     p.add_argument("--dir", metavar="DIR", default=None, help="the cache folder (default: as above)")
     p.set_defaults(run=run)
 
@@ -27,12 +29,19 @@ def _size(n: int) -> str:
 
 def run(args) -> int:
     from ..cache import ShapeCache
+    from ..errors import OutputError
 
     cache = ShapeCache(args.dir)
+    try:
+        info = cache.info() if args.action == "info" else cache.clear()
+    except OSError as error:  # an unreadable folder, a file that cannot be removed: was an internal error
+        where = f" ({error.filename})" if error.filename else ""
+        raise OutputError(f"Cannot {'read' if args.action == 'info' else 'clear'} the cache folder "
+                          f"{cache.root}: {error.strerror or error}{where}. Check its permissions, or give "
+                          "another folder with --dir.") from None
+    missing = "" if cache.root.is_dir() else " (the folder does not exist yet)"
     if args.action == "info":
-        info = cache.info()
-        print(f"{info['path']}: {info['files']} prepared shapes, {_size(info['bytes'])}")
+        print(f"{info['path']}: {info['files']} prepared shapes, {_size(info['bytes'])}{missing}")
     else:
-        info = cache.clear()
-        print(f"{info['path']}: removed {info['files']} prepared shapes, {_size(info['bytes'])}")
+        print(f"{info['path']}: removed {info['files']} prepared shapes, {_size(info['bytes'])}{missing}")
     return 0

@@ -122,6 +122,18 @@ def test_evaluate_a_map_that_maps_nothing_is_bad_data(files, capsys):
     assert code == EXIT_INPUT and "maps no SOURCE vertex" in err
 
 
+def test_evaluate_json_is_strict_json_when_no_truth_point_is_mapped(files, tmp_path, capsys):
+    _, p, truth = files
+    partial = tmp_path / "partial.txt"
+    np.savetxt(partial, np.where(np.arange(truth.size) < 3, -1, truth), fmt="%d")
+    sparse = tmp_path / "sparse.txt"
+    sparse.write_text("".join(f"{i} {truth[i]}\n" for i in range(3)))  # only the unmapped vertices
+    code, out, _ = _run(["evaluate", p["src"], p["tgt"], str(partial), "--gt", str(sparse), "--json"], capsys)
+    assert code == 0 and "NaN" not in out  # NaN is no JSON: jq and browsers refused the report
+    report = json.loads(out, parse_constant=lambda name: pytest.fail(f"{name} in the JSON"))
+    assert report["n_unmapped"] == 3 and report["mean_error"] is None
+
+
 def test_evaluate_largest_component(files, capsys):
     _, p, truth = files
     args = ["evaluate", p["src"], p["two"], p["map"], "--gt", p["map"]]

@@ -143,6 +143,18 @@ def _restrict_to_piece(target, mapping: np.ndarray, truths: list, quiet: bool, w
     return mapping, restricted
 
 
+def _finite(value):
+    """``value`` with every NaN or infinite float replaced by None (JSON has no NaN: jq and browsers
+    refused the report)."""
+    if isinstance(value, dict):
+        return {key: _finite(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(item) for item in value]
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value
+
+
 def run(args) -> int:
     from ..errors import InputError
     from ..evaluation import cumulative_curve, evaluate_map, map_quality, scalar_summary
@@ -197,8 +209,8 @@ def run(args) -> int:
         if sym is not None:
             curves["mirrored truth"] = cumulative_curve(report["sym_errors"])
         plot_cumulative_curves(args.curve, curves, title=f"{args.map} on {args.target}")
-    if args.json:
-        json.dump(summary, sys.stdout, indent=2)
+    if args.json:  # strict JSON: an error that cannot be measured (no truth point mapped) is null, not NaN
+        json.dump(_finite(summary), sys.stdout, indent=2, allow_nan=False)
         sys.stdout.write("\n")
         return 0
     under = " / ".join(f"{100 * v:.1f} %" for v in report["under"].values())

@@ -246,6 +246,16 @@ def test_texture_writes_all_three_files_or_none(files, textured, tmp_path, capsy
     assert code == 0 and "wrote" in err and len(list(tmp_path.iterdir())) == 3
 
 
+def test_texture_refuses_a_point_cloud_source(files, textured, tmp_path, capsys):
+    _, p, _ = files
+    cloud = tmp_path / "source.xyz"
+    np.savetxt(cloud, trimesh.load(p["src"], process=False).vertices)
+    code, _, err = _run(["texture", str(cloud), str(textured), p["map"], "-o", str(tmp_path / "t.obj"), "-k", "10"],
+                        capsys)
+    assert code == EXIT_INPUT and "is a point cloud: a texture needs a surface" in err  # wrote an OBJ of points
+    assert not (tmp_path / "t.obj").exists()
+
+
 @pytest.mark.parametrize("command", ["fmap", "texture"])
 def test_map_commands_refuse_a_map_that_maps_nothing_and_name_their_own_fix(files, textured, tmp_path, capsys,
                                                                              command):

@@ -162,6 +162,11 @@ def run_texture(args) -> int:
                    "its texture": obj.with_name(obj.stem + "_texture.png")}, inputs)
     textured = read_textured_obj(args.target)
     source, target, mapping = _inputs(args, (textured.vertices, textured.faces))
+    if source.is_cloud:  # it wrote an OBJ of points with UVs: no surface shows a texture
+        from ..errors import InputError
+
+        raise InputError(f"SOURCE {args.source} is a point cloud: a texture needs a surface. Mesh it first "
+                         "('meshcorr transfer' carries per-vertex colours onto a cloud).")
     uv = transfer_uv(precise_map(source, target, mapping, k=args.k), textured)
     with staged_writes():  # the .obj, .mtl and image appear together, or none of them
         obj, mtl, png = write_textured_obj(args.output, source.vertices, source.faces, uv, textured.image,

@@ -351,3 +351,16 @@ def test_cache_clear_that_cannot_remove_a_file_is_one_line(tmp_path, capsys, mon
     monkeypatch.undo()
     code, out, _ = _run(["cache", "info", "--dir", str(tmp_path / "none")], capsys)
     assert code == 0 and "does not exist yet" in out
+
+
+@pytest.mark.parametrize("command, expected", [
+    ("cache", "info: print the folder"),  # the action had no help
+    ("transfer", "one row per SOURCE vertex"),  # said values were written for a scalar field only
+    ("show", "errors against --gt (default: heat)"),  # said --error only; --gt uses it too
+    ("embed", "--max-memory"),
+    ("bench", "2..10"),
+])
+def test_help_explains_the_options(capsys, command, expected):
+    with pytest.raises(SystemExit):
+        main([command, "--help"])
+    assert expected in " ".join(capsys.readouterr().out.split())

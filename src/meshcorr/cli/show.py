@@ -37,7 +37,7 @@ def add_parser(sub) -> None:
     p.add_argument("--coloring", choices=("parts", "xyz"), default="parts",
                    help="colouring of TARGET (default: parts)")
     p.add_argument("--geodesic", choices=GEODESIC_METHODS, default="heat",
-                   help="geodesic solver for --error (default: heat)")
+                   help="geodesic solver of the errors against --gt (default: heat)")
     add_camera_arguments(p)
     p.set_defaults(run=run)
 

@@ -18,7 +18,8 @@ Give each SOURCE vertex the attribute of the TARGET vertex MAP sends it to
               3 or 4 columns of 0-255 integers are colours, one column is a
               scalar field, coloured with --cmap
 Unmapped SOURCE vertices (-1 in MAP) are grey. --values-out also saves the
-transferred raw values (.npy or .txt) when FILE is a scalar field.
+transferred values, one row per SOURCE vertex (.npy, else text): a scalar
+field (NaN where unmapped), or the colours.
 """
 
 
@@ -35,7 +36,7 @@ def add_parser(sub) -> None:
     p.add_argument("--cmap", choices=("viridis", "coolwarm", "error"), default="viridis",
                    help="colour map of a scalar field (default: viridis)")
     p.add_argument("--values-out", metavar="FILE",
-                   help="also write the transferred field (.npy, or text)")
+                   help="also write the transferred values, one row per SOURCE vertex (.npy, else text)")
     p.set_defaults(run=run)
 
 

@@ -41,22 +41,18 @@ def add_parser(sub) -> None:
 
 
 def _read_attribute(args, vertices, faces):
-    """TARGET's values named by --attribute; a FILE that cannot be used is bad input data (exit 3).
-
-    (Its errors were usage errors, exit 2, and a .npy of text an internal error.)
-    """
-    from ..errors import InputError, ParameterError
+    """TARGET's values named by --attribute; a FILE whose values are not numbers is refused in one line
+    (a .npy of text was an internal error). Its errors are usage errors (exit 2), as the library's."""
+    from ..errors import ParameterError
     from ..transfer import read_attribute
 
-    if args.attribute in ("colors", "parts", "xyz"):
-        return read_attribute(args.attribute, args.target, vertices, faces)
     try:
         return read_attribute(args.attribute, args.target, vertices, faces)
-    except ParameterError as error:
-        raise InputError(str(error)) from None
-    except (TypeError, ValueError) as error:  # e.g. a .npy of strings: its values are not numbers
-        raise InputError(f"--attribute {args.attribute}: not a table of numbers ({error}); give one number "
-                         "(a scalar field) or 3-4 colour channels (0-255) per TARGET vertex.") from None
+    except (TypeError, ValueError) as error:
+        if isinstance(error, ParameterError):
+            raise
+        raise ParameterError(f"--attribute {args.attribute}: not a table of numbers ({error}); give one number "
+                             "(a scalar field) or 3-4 colour channels (0-255) per TARGET vertex.") from None
 
 
 def run(args) -> int:

@@ -183,7 +183,7 @@ def test_transfer_attribute_file_of_text_is_one_line(files, tmp_path, capsys):
     out = tmp_path / "t.ply"
     code, _, err = _run(["transfer", p["src"], p["tgt"], p["map"], "--attribute", str(text), "-o", str(out)],
                         capsys)
-    assert code == EXIT_USAGE and "not a table of numbers" in err  # exit 2, as its other errors (test_viz)
+    assert code == 3 and "not a table of numbers" in err  # an attribute file that cannot be used: bad data
     assert not out.exists()
 
 

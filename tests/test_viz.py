@@ -254,17 +254,17 @@ def test_transfer_scalar_field(pair, tmp_path):
 def test_transfer_errors_are_one_line(pair, tmp_path, capsys):
     wrong = tmp_path / "wrong.txt"
     np.savetxt(wrong, np.zeros(pair["n_target"] + 1))
-    cases = [
-        (_args(pair, "--attribute", wrong, "-o", tmp_path / "a.ply"), "one row per target vertex"),
-        (_args(pair, "--attribute", tmp_path / "nope.txt", "-o", tmp_path / "b.ply"), "no such file"),
-        (_args(pair, "--attribute", "foo", "-o", tmp_path / "b.ply"), "not a known attribute"),
-        (_args(pair, "--attribute", tmp_path, "-o", tmp_path / "b.ply"), "cannot be read"),
-        (_args(pair, "--attribute", "colors", "-o", tmp_path / "c.ply"), "no per-vertex colours"),
-        (_args(pair, "--attribute", "parts", "-o", tmp_path / "d.off"), ".ply or .obj"),
-        (_args(pair, "--attribute", "xyz", "-o", tmp_path / "no" / "e.ply"), "does not exist"),
+    cases = [  # (arguments, exit code: 2 usage, 3 an attribute file that cannot be used, message)
+        (_args(pair, "--attribute", wrong, "-o", tmp_path / "a.ply"), 3, "one row per target vertex"),
+        (_args(pair, "--attribute", tmp_path / "nope.txt", "-o", tmp_path / "b.ply"), 2, "no such file"),
+        (_args(pair, "--attribute", "foo", "-o", tmp_path / "b.ply"), 2, "not a known attribute"),
+        (_args(pair, "--attribute", tmp_path, "-o", tmp_path / "b.ply"), 3, "cannot be read"),
+        (_args(pair, "--attribute", "colors", "-o", tmp_path / "c.ply"), 2, "no per-vertex colours"),
+        (_args(pair, "--attribute", "parts", "-o", tmp_path / "d.off"), 2, ".ply or .obj"),
+        (_args(pair, "--attribute", "xyz", "-o", tmp_path / "no" / "e.ply"), 2, "does not exist"),
     ]
-    for argv, message in cases:
-        assert main(["transfer", *argv]) == 2
+    for argv, code, message in cases:
+        assert main(["transfer", *argv]) == code
         err = capsys.readouterr().err
         assert err.startswith("meshcorr: error:") and message in err, err
     far = tmp_path / "far.txt"  # a map file that does not fit the meshes: bad input data

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import ParameterError
+from .errors import InputError, ParameterError
 
 __all__ = ["check_map", "pull_back", "read_attribute", "transfer_attribute", "write_values"]
 
@@ -119,8 +119,11 @@ def read_attribute(spec: str, target_path, vertices, faces) -> np.ndarray:
     Raises
     ------
     ParameterError
-        If the file is missing or unreadable, has no colours, or does not
-        have one row per target vertex.
+        If ``spec`` is neither an attribute name nor an existing file, or
+        the target has no colours.
+    InputError
+        If the file cannot be read, is not a table of numbers, or does not
+        have one row per target vertex (bad input data: the CLI's exit 3).
     """
     n = len(vertices)
     if spec in ("parts", "xyz"):
@@ -153,20 +156,24 @@ def read_attribute(spec: str, target_path, vertices, faces) -> np.ndarray:
             "'xyz' or a file with one row per target vertex (.npy or text)."
         ) from exc
     except OSError as exc:  # a folder, no permission, ...
-        raise ParameterError(f"--attribute {spec}: cannot be read ({exc.strerror or exc}).") from exc
-    except ValueError as exc:
-        raise ParameterError(f"--attribute {spec}: not a numeric table ({exc}).") from exc
+        raise InputError(f"--attribute {spec}: cannot be read ({exc.strerror or exc}).") from exc
+    except (TypeError, ValueError) as exc:  # text that is not numbers, a .npy of strings or objects
+        raise InputError(f"--attribute {spec}: not a table of numbers ({exc}); give one number (a scalar "
+                         "field) or 3-4 colour channels (0-255) per target vertex.") from exc
     values = np.asarray(values)
+    if not (np.issubdtype(values.dtype, np.number) or values.dtype == bool):  # e.g. a .npy of strings
+        raise InputError(f"--attribute {spec}: not a table of numbers (it holds {values.dtype} values); give "
+                         "one number (a scalar field) or 3-4 colour channels (0-255) per target vertex.")
     if values.ndim == 2 and values.shape[1] == 1:
         values = values[:, 0]
     if len(values) != n or values.ndim > 2 or (values.ndim == 2 and values.shape[1] not in (3, 4)):
-        raise ParameterError(
+        raise InputError(
             f"--attribute {spec} has shape {values.shape}; expected one row per target vertex "
             f"({n}) holding one number (a scalar field) or 3-4 colour channels (0-255)."
         )
     if values.ndim == 2:
         if np.any(values < 0) or np.any(values > 255):
-            raise ParameterError(f"--attribute {spec}: colour channels must lie in 0..255.")
+            raise InputError(f"--attribute {spec}: colour channels must lie in 0..255.")
         return np.round(values[:, :3]).astype(np.uint8)
     return values.astype(np.float64)
 

@@ -41,18 +41,12 @@ def add_parser(sub) -> None:
 
 
 def _read_attribute(args, vertices, faces):
-    """TARGET's values named by --attribute; a FILE whose values are not numbers is refused in one line
-    (a .npy of text was an internal error). Its errors are usage errors (exit 2), as the library's."""
-    from ..errors import ParameterError
+    """TARGET's values named by --attribute: a name or an attribute FILE that cannot be used is refused
+    by :func:`meshcorr.transfer.read_attribute` (a name that is neither an attribute nor a file: exit 2;
+    a file that cannot be used: bad input data, exit 3)."""
     from ..transfer import read_attribute
 
-    try:
-        return read_attribute(args.attribute, args.target, vertices, faces)
-    except (TypeError, ValueError) as error:
-        if isinstance(error, ParameterError):
-            raise
-        raise ParameterError(f"--attribute {args.attribute}: not a table of numbers ({error}); give one number "
-                             "(a scalar field) or 3-4 colour channels (0-255) per TARGET vertex.") from None
+    return read_attribute(args.attribute, args.target, vertices, faces)
 
 
 def run(args) -> int:

@@ -37,6 +37,27 @@ def test_ctrl_c_while_the_command_line_loads_exits_130_without_a_traceback(monke
     assert capsys.readouterr().err == "meshcorr: interrupted\n"
 
 
+@pytest.mark.parametrize("interrupted", [True, False])
+def test_an_import_error_is_an_interrupt_only_when_one_caused_it(monkeypatch, capsys, interrupted):
+    # numpy re-raises whatever stops its own import (a Ctrl-C too) as an ImportError.
+    loading = types.ModuleType("meshcorr.cli")
+
+    def failing(name):
+        try:
+            raise KeyboardInterrupt if interrupted else OSError("libopenblas.so: cannot open shared object file")
+        except BaseException as error:
+            raise ImportError("Error importing numpy") from error
+
+    loading.__getattr__ = failing
+    monkeypatch.setitem(sys.modules, "meshcorr.cli", loading)
+    if interrupted:
+        assert _console.main(["--version"]) == 130
+        assert capsys.readouterr().err == "meshcorr: interrupted\n"
+    else:
+        with pytest.raises(ImportError, match="Error importing numpy"):
+            _console.main(["--version"])
+
+
 def test_the_console_script_runs_the_command_line(capsys):
     with pytest.raises(SystemExit) as done:
         _console.main(["--version"])

@@ -18,6 +18,25 @@ def main(argv: list[str] | None = None) -> int:
     try:
         from .cli import main as run
     except KeyboardInterrupt:
-        print("meshcorr: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return _interrupted()
+    except ImportError as error:  # numpy turns an interrupt during its own import into an ImportError
+        if _caused_by_interrupt(error):
+            return _interrupted()
+        raise
     return run(argv)
+
+
+def _interrupted() -> int:
+    print("meshcorr: interrupted", file=sys.stderr)
+    return EXIT_INTERRUPTED
+
+
+def _caused_by_interrupt(error: BaseException) -> bool:
+    """Whether a KeyboardInterrupt is in ``error``'s chain of causes and contexts."""
+    seen: set[int] = set()
+    while error is not None and id(error) not in seen:
+        if isinstance(error, KeyboardInterrupt):
+            return True
+        seen.add(id(error))
+        error = error.__cause__ or error.__context__
+    return False

@@ -184,7 +184,7 @@ def read_vts(path, n_vertices: int | None = None) -> np.ndarray:
     return vts - 1
 
 
-def read_pairs(path) -> GroundTruth:
+def read_pairs(path, n_source: int | None = None) -> GroundTruth:
     """Read a file of 0-based vertex pairs, or a dense map with one index per line.
 
     Parameters
@@ -193,6 +193,9 @@ def read_pairs(path) -> GroundTruth:
         Lines ``i j`` (or ``i,j`` / ``i:j``); or lines holding one index each,
         line i being the target vertex of source vertex i (negative entries
         are skipped: unmapped).
+    n_source : int, optional
+        Vertex count of the source mesh: a dense map (one index per line) must
+        then have exactly that many lines.
 
     Returns
     -------
@@ -201,8 +204,9 @@ def read_pairs(path) -> GroundTruth:
     Raises
     ------
     ParameterError
-        Missing or empty file, a line that is not one or two integers, or a
-        mix of one- and two-column lines.
+        Missing or empty file, a line that is not one or two integers, a
+        mix of one- and two-column lines, or a dense map whose line count is
+        not ``n_source``.
     """
     path = Path(path)
     rows = []
@@ -219,6 +223,13 @@ def read_pairs(path) -> GroundTruth:
                          "per line (a dense map) or one pair 'i j' per line throughout.")
     table = np.array([values for _, values in rows], dtype=np.int64)
     if table.shape[1] == 1:
+        if n_source is not None and len(table) != n_source:
+            raise InputError(
+                f"{path} has {len(table)} lines of one index each (a dense map), but the source mesh "
+                f"has {n_source} vertices: a dense map needs exactly one line per source vertex "
+                f"({n_source} lines, -1 where a vertex has no truth). Check that the file belongs "
+                "to this SOURCE, or give the known pairs as lines 'i j' (source, target) instead."
+            )
         target = table[:, 0]
         source = np.flatnonzero(target >= 0)
         return GroundTruth(source, target[source], str(path))
@@ -274,7 +285,7 @@ def load_ground_truth(spec: str | os.PathLike | Sequence[str | os.PathLike], *, 
                 f"A .vts file ({path}) indexes one mesh only: give the source's and the "
                 "target's .vts files together (e.g. --gt A.vts B.vts)."
             )
-        return read_pairs(path).check(n_source, n_target)
+        return read_pairs(path, n_source).check(n_source, n_target)
     raise InputError(
         "A ground truth is 'identity', two .vts files or one file of vertex pairs; "
         f"got {len(items)} items."

@@ -1,10 +1,13 @@
 """Library input checks: dense-map truth files, .npz archives, precise_map's basis size, cache listings."""
 
+import io
+
 import numpy as np
 import pytest
 
-from meshcorr.errors import InputError
+from meshcorr.errors import InputError, MeshError
 from meshcorr.ground_truth import load_ground_truth, read_pairs
+from meshcorr.io import read_map, read_mesh, read_npz
 
 
 def _write_lines(path, values):
@@ -35,3 +38,56 @@ def test_dense_truth_of_the_right_length_and_pair_files_still_load(tmp_path):
     pairs = load_ground_truth(_write_lines(tmp_path / "p.txt", ["0 1"]), n_source=500, n_target=3)
     assert len(pairs) == 1  # a sparse file of pairs needs no line per vertex
     assert len(read_pairs(tmp_path / "d.txt")) == 2  # without a vertex count: unchecked, as before
+
+
+# ---------------------------------------------------------------- .npz archives
+
+def _npy_bytes(array):
+    buffer = io.BytesIO()
+    np.save(buffer, array)
+    return buffer.getvalue()
+
+
+@pytest.mark.parametrize("name, make, found", [
+    ("array.npy", lambda p: np.save(p, np.arange(3)), "it is a .npy array"),  # was a raw TypeError
+    ("named.npz", lambda p: p.write_bytes(_npy_bytes(np.arange(3))), "it is a .npy array"),
+    ("words.txt", lambda p: p.write_text("1 2 3\n"), "it is a text file, not an .npz archive"),
+    ("noise.bin", lambda p: p.write_bytes(b"\x00\x01garbage\xff"), "it is not an .npz archive"),
+    ("empty.npz", lambda p: p.write_bytes(b""), "it is an empty file, not an .npz archive"),
+])
+def test_read_npz_names_a_file_that_is_no_npz(tmp_path, name, make, found):
+    path = tmp_path / name
+    make(path)
+    with pytest.raises(InputError, match="not a saved meshcorr result") as error:  # text and noise: advice
+        read_npz(path, "a saved meshcorr result")  # to load them with allow_pickle
+    message = str(error.value)
+    assert str(path) in message and found in message and "pickle" not in message
+
+
+def test_read_npz_refuses_a_plain_zip_and_object_arrays(tmp_path):
+    import zipfile
+
+    with zipfile.ZipFile(tmp_path / "plain.zip", "w") as archive:
+        archive.writestr("notes.txt", "hi")
+    with pytest.raises(InputError, match="a zip archive, not an .npz archive .*'notes.txt'"):
+        read_npz(tmp_path / "plain.zip", "a functional map file")
+    np.savez(tmp_path / "objects.npz", a=np.array([object()]))
+    with pytest.raises(InputError, match="Python objects") as error:
+        read_npz(tmp_path / "objects.npz", "a functional map file")
+    assert "allow_pickle" not in str(error.value)
+    np.savez(tmp_path / "good.npz", a=np.arange(3))
+    np.testing.assert_array_equal(read_npz(tmp_path / "good.npz", "x")["a"], [0, 1, 2])
+
+
+def test_npy_readers_name_what_the_file_is(tmp_path):
+    path = tmp_path / "x.npy"
+    path.write_text("1\n2\n")  # numpy's message advised loading it with allow_pickle
+    for read, error in ((read_map, InputError), (read_mesh, MeshError)):
+        with pytest.raises(error, match="it is a text file, not a .npy array") as caught:
+            read(path)
+        assert "pickle" not in str(caught.value)
+    np.savez(path.with_suffix(".npz"), a=np.arange(3))
+    path.write_bytes(path.with_suffix(".npz").read_bytes())  # an .npz named .npy: an AttributeError
+    for read, error in ((read_map, InputError), (read_mesh, MeshError)):
+        with pytest.raises(error, match="it is a zip archive such as an .npz"):
+            read(path)

@@ -183,8 +183,8 @@ def _read_xyz(data: bytes, label: str) -> np.ndarray:
 def _read_npy(path: Path, label: str) -> np.ndarray:
     """The points of an ``.npy`` file holding one ``(n, 3)`` array of real numbers."""
     try:
-        points = np.load(path, allow_pickle=False)
-    except Exception as exc:  # numpy raises several types on a file that is no .npy array
+        points = _load_npy(path)
+    except ValueError as exc:
         raise MeshError(f"{label}: could not be read as a .npy array ({exc}). Save the points with "
                         "numpy.save(path, points).") from exc
     if points.ndim != 2 or points.shape[1] != 3 or not np.issubdtype(points.dtype, np.number) \
@@ -567,8 +567,8 @@ def read_map(path, *, name: str | None = None) -> np.ndarray:
                          else f"Not a file: {path}{which}; give a map file.")
     if path.suffix.lower() == ".npy":
         try:
-            mapping = np.load(path, allow_pickle=False)
-        except Exception as exc:
+            mapping = _load_npy(path)
+        except ValueError as exc:
             raise InputError(f"{path}: could not be read as a .npy array ({exc}).") from exc
         if mapping.ndim != 1 or not np.issubdtype(mapping.dtype, np.integer):
             raise InputError(
@@ -629,6 +629,50 @@ def write_mesh(path, vertices, faces, vertex_colors=None) -> None:
     atomic_write(path, lambda file: file.write(payload))
 
 
+def _file_kind(path) -> str | None:
+    """What a file holds, told from its first bytes, for messages: ``"npy"`` (a NumPy ``.npy`` array),
+    ``"zip"`` (a zip archive, as an ``.npz`` is), ``"text"``, ``"empty"``; None for any other.
+    ``OSError`` if it cannot be read."""
+    with open(path, "rb") as file:
+        head = file.read(4096)
+    if not head:
+        return "empty"
+    if head.startswith(b"\x93NUMPY"):
+        return "npy"
+    if head.startswith((b"PK\x03\x04", b"PK\x05\x06")):
+        return "zip"
+    if b"\0" not in head:
+        try:
+            head.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            if exc.start < len(head) - 3:  # not a character cut at the end of the head
+                return None
+        return "text"
+    return None
+
+
+def _load_npy(path) -> np.ndarray:
+    """The array of a ``.npy`` file (no pickles); ``ValueError`` with the reason in words if it is none.
+
+    NumPy read an ``.npz`` as an archive object and said of any other file that it holds pickled
+    data, to be loaded with ``allow_pickle``: advice to run untrusted code.
+    """
+    try:
+        kind = _file_kind(path)
+    except OSError as exc:
+        raise ValueError(f"it cannot be read: {exc.strerror or exc}") from exc
+    if kind != "npy":
+        raise ValueError({"zip": "it is a zip archive such as an .npz, not a .npy array",
+                          "text": "it is a text file, not a .npy array", "empty": "the file is empty"}.get(
+                              kind, "it is not a .npy file: it lacks the NumPy header"))
+    try:
+        return np.load(path, allow_pickle=False)
+    except Exception as exc:  # numpy raises several types on a damaged .npy array
+        if "pickle" in str(exc):
+            raise ValueError("it holds an array of Python objects, which meshcorr does not load") from exc
+        raise ValueError(str(exc).rstrip(".")) from exc
+
+
 def read_npz(path, what: str) -> dict[str, np.ndarray]:
     """Every array of an ``.npz`` file (no pickles), or an :class:`InputError` naming ``what`` was expected.
 
@@ -638,13 +682,38 @@ def read_npz(path, what: str) -> dict[str, np.ndarray]:
     what : str
         What the file should hold, for messages (e.g. "a saved meshcorr result").
     """
+    import zipfile
+
+    if not Path(path).exists():
+        raise InputError(f"{path}: no such file.")
+    if not Path(path).is_file():
+        raise InputError(f"{path} is not {what}: it is a folder, not a file.")
     try:
+        kind = _file_kind(path)
+    except OSError as exc:
+        raise InputError(f"{path} cannot be read: {exc.strerror or exc}.") from exc
+    if kind != "zip":  # np.load read a .npy as one array and any other file as a pickle
+        found = {"npy": "a .npy array (one array, as numpy.save writes)", "text": "a text file",
+                 "empty": "an empty file"}.get(kind)
+        raise InputError(f"{path} is not {what}: it is {found + ', not' if found else 'not'} an .npz "
+                         f"archive. Give {what}: an .npz archive of named arrays (numpy.savez).")
+    try:
+        with zipfile.ZipFile(path) as archive:
+            odd = [name for name in archive.namelist() if not name.endswith(".npy")]
+        if odd:
+            raise InputError(f"{path} is not {what}: it is a zip archive, not an .npz archive (its member "
+                             f"{odd[0]!r} is no .npy array). Give {what}: an .npz archive of named arrays "
+                             "(numpy.savez).")
         with np.load(path, allow_pickle=False) as data:
             return {name: np.asarray(data[name]) for name in data.files}
-    except FileNotFoundError as exc:
-        raise InputError(f"{path}: no such file.") from exc
-    except (OSError, ValueError) as exc:
-        raise InputError(f"{path} is not {what} (.npz): {exc}.") from exc
+    except InputError:
+        raise
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        if "pickle" in str(exc):
+            reason = "an array in it holds Python objects, which meshcorr does not load"
+        else:
+            reason = str(exc).rstrip(".")
+        raise InputError(f"{path} is not {what} (.npz): {reason}.") from exc
 
 
 def write_npz(path, arrays: dict) -> None:

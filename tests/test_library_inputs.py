@@ -91,3 +91,24 @@ def test_npy_readers_name_what_the_file_is(tmp_path):
     for read, error in ((read_map, InputError), (read_mesh, MeshError)):
         with pytest.raises(error, match="it is a zip archive such as an .npz"):
             read(path)
+
+
+# ---------------------------------------------------------------- precise_map's basis size
+
+def test_precise_map_refuses_a_basis_larger_than_the_mesh():
+    from meshcorr.datasets import tube
+    from meshcorr.errors import ParameterError
+    from meshcorr.fmap import functional_map
+    from meshcorr.mesh import Mesh
+    from meshcorr.precise import precise_map
+
+    shape = tube(n_along=6, n_around=5)  # 32 vertices
+    mesh = Mesh(shape.vertices, shape.faces)
+    identity = np.arange(mesh.n_vertices)
+    with pytest.raises(ParameterError, match="must be an int <= 31") as fmap_error:
+        functional_map(mesh, mesh, identity, 1000)
+    with pytest.raises(ParameterError) as error:  # was lowered to 31 in silence
+        precise_map(mesh, mesh, identity, k=1000)
+    message = str(error.value)
+    assert message.startswith(str(fmap_error.value)) and "has 32 vertices" in message and "k <= 31" in message
+    assert precise_map(mesh, mesh, identity, k=31).vertex_map().tolist() == identity.tolist()

@@ -169,7 +169,8 @@ def precise_map(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 30,
     mapping : (n_source,) int
         Target vertex of each source vertex, numbering of these meshes (-1 = unmapped).
     k : int
-        Laplace-Beltrami basis size (clipped to the vertex counts).
+        Laplace-Beltrami basis size, 2 .. n - 1 for the smaller mesh's n vertices (as
+        :func:`meshcorr.fmap.functional_map`'s).
     n_nearest : int
         Target vertices, nearest in the spectral domain, whose triangles are searched.
     random_state : int or None
@@ -184,13 +185,21 @@ def precise_map(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 30,
     ------
     MeshError
         The target is a point cloud (it has no triangles).
+    ParameterError
+        ``k`` or ``n_nearest`` out of range, or a map that does not fit the meshes.
     """
     n_nearest = check_int("n_nearest", n_nearest, minimum=1)
     if target.is_cloud:
         raise MeshError(f"{target.name} is a point cloud: a precise map sends each source vertex to a point "
                         "on a target triangle, and a cloud has none. Use the vertex map (result.map), or match "
                         "onto a triangle mesh of the target.")
-    k = min(check_int("k", k, minimum=2), source.n_vertices - 1, target.n_vertices - 1)
+    k = check_int("k", k, minimum=2)
+    role, n = min(("source", source.n_vertices), ("target", target.n_vertices), key=lambda item: item[1])
+    try:  # functional_map's bound (it was lowered here in silence), with the count it comes from
+        check_int("k", k, maximum=n - 1)
+    except ParameterError as error:
+        raise ParameterError(f"{error} The {role} mesh has {n} vertices, and a Laplace-Beltrami basis of "
+                             f"n vertices holds at most n - 1 = {n - 1} functions: give k <= {n - 1}.") from None
     fmap = functional_map(source, target, mapping, k, random_state=random_state)
     mapped = np.flatnonzero(np.asarray(mapping) >= 0)
     queries = (fmap.source_basis @ fmap.C)[mapped]

@@ -8,7 +8,10 @@ per line): the TOSCA / SHREC layout of Ren et al. (2018).
 :func:`run_benchmark` maps every selected pair with every method, scores the
 map with :func:`meshcorr.evaluation.evaluate_map`, and rewrites
 ``results.csv`` atomically after each (pair, method), so an interrupted run
-restarted on the same output folder skips what is done. A method that
+restarted on the same output folder skips what is done; ``run.json`` there
+keeps the settings and the dataset's identity (:func:`dataset_identity`), and
+a restart with other settings, on another dataset or on one whose meshes or
+truth files changed is refused before any work. A method that
 raises on one pair is recorded as a failed row; the run goes on.
 :func:`summarize` turns the rows into a per-method table and curves.
 """
@@ -16,6 +19,7 @@ raises on one pair is recorded as a failed row; the run goes on.
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
 import json
 import time
@@ -32,7 +36,7 @@ from .ground_truth import load_ground_truth
 from .io import atomic_write
 from .mesh import Mesh, as_mesh
 
-__all__ = ["METHODS", "Dataset", "FIELDS", "load_dataset", "read_rows", "run_benchmark",
+__all__ = ["METHODS", "Dataset", "FIELDS", "dataset_identity", "load_dataset", "read_rows", "run_benchmark",
            "run_method", "stratified_sample", "summarize", "write_summary"]
 
 #: Methods the benchmark knows; all but "spectral" come from meshcorr.baselines.
@@ -213,23 +217,99 @@ def _write_rows(path: Path, rows: list[dict]) -> None:
     atomic_write(path, lambda file: file.write(payload))
 
 
-def _check_run_settings(out: Path, settings: dict) -> None:
-    """Refuse to mix results made with different settings in one folder."""
+def dataset_identity(dataset: Dataset) -> dict:
+    """What a benchmark run was made from: the folder, its pair list and its files' content.
+
+    ``path`` is the resolved folder; ``pairs`` a SHA-256 of the pair list (as read, so comments and
+    spacing do not count); ``files`` the SHA-256 of each mesh and truth file the pairs name
+    (``NAME.off``, ``corres/NAME.vts`` and ``corres/NAME.sym.vts`` where it exists), by path in the
+    folder; ``content`` one SHA-256 of them all. Only file bytes are hashed, so this costs a read of
+    the dataset.
+    """
+    pairs = hashlib.sha256("".join(f"{s}\t{t}\n" for s, t in dataset.pairs).encode()).hexdigest()
+    files = {}
+    for name in sorted({n for pair in dataset.pairs for n in pair}):
+        for path in (dataset.mesh_path(name), dataset.vts_path(name), dataset.vts_path(name, sym=True)):
+            if path.is_file():
+                try:
+                    with path.open("rb") as file:
+                        digest = hashlib.file_digest(file, "sha256").hexdigest()
+                except OSError as exc:
+                    raise InputError(f"Cannot read {path}: {exc.strerror}.") from exc
+                files[path.relative_to(dataset.root).as_posix()] = digest
+    content = hashlib.sha256("".join(f"{k}\t{v}\n" for k, v in sorted(files.items())).encode()).hexdigest()
+    return {"path": str(dataset.root.resolve()), "n_pairs": len(dataset.pairs), "pairs": pairs,
+            "content": content, "files": files}
+
+
+def _same_dataset(previous, current: dict) -> bool:
+    return previous["pairs"] == current["pairs"] and previous["content"] == current["content"]
+
+
+def _pairs(n) -> str:
+    return f"{n} pair{'' if n == 1 else 's'}" if isinstance(n, int) else "? pairs"
+
+
+def _dataset_mismatch(out: Path, previous: dict, current: dict) -> str:
+    """One paragraph: which dataset ``out`` holds results of, which one this run is of, what to do."""
+    old_files, new_files = previous.get("files"), current["files"]
+    changes = []
+    if previous["pairs"] != current["pairs"]:
+        changes.append(f"pair list ({_pairs(previous.get('n_pairs'))} recorded, {_pairs(current['n_pairs'])} now)")
+    if previous["content"] != current["content"]:
+        if isinstance(old_files, dict):
+            changed = sorted(k for k in old_files.keys() | new_files.keys() if old_files.get(k) != new_files.get(k))
+            changes.append("mesh / truth files (" + ", ".join(changed[:3])
+                           + (f" and {len(changed) - 3} more" if len(changed) > 3 else "") + ")")
+        else:
+            changes.append("mesh / truth files")
+    if previous["path"] == current["path"]:
+        what = (f"{out} holds results of the dataset {previous['path']}, but that folder's "
+                f"{' and '.join(changes)} changed since")
+    else:
+        what = (f"{out} holds results of the dataset {previous['path']}, and this run is of another "
+                f"dataset, {current['path']}, whose {' and '.join(changes)} differ")
+    return (f"{what}: resuming would report those records as this dataset's results. Use another --out "
+            f"folder, or delete {out} (its results.csv, run.json, maps/ and errors/) to start over; delete "
+            f"only {out / 'run.json'} if you know the records there still hold for this dataset.")
+
+
+def _check_run_settings(out: Path, settings: dict, *, dataset: dict | None = None) -> None:
+    """Refuse to mix results made with different settings (or, given ``dataset``, data) in one folder.
+
+    ``dataset`` is :func:`dataset_identity` of this run's data, kept in ``run.json`` under
+    ``"dataset"``; a ``run.json`` written before it was kept (no such key) is taken as of this
+    dataset, which is then recorded.
+    """
     path = out / "run.json"
+    current = dict(settings) if dataset is None else dict(settings, dataset=dataset)
     if path.is_file():
         try:
             previous = json.loads(path.read_text())
         except (ValueError, UnicodeDecodeError):
             raise InputError(f"{path} is damaged (not JSON): delete it to run again with the current "
                              "settings, or use another --out folder.") from None
+        if not isinstance(previous, dict):
+            raise InputError(f"{path} is damaged (not a JSON object): delete it to run again with the "
+                             "current settings, or use another --out folder.")
+        if dataset is not None:
+            recorded = previous.pop("dataset", None)
+            if recorded is not None:
+                if not (isinstance(recorded, dict) and all(isinstance(recorded.get(k), str)
+                                                           for k in ("path", "pairs", "content"))):
+                    raise InputError(f"{path} is damaged (its 'dataset' entry is not one this version "
+                                     "writes): delete it to run again, or use another --out folder.")
+                if not _same_dataset(recorded, dataset):
+                    raise ParameterError(_dataset_mismatch(out, recorded, dataset))
         if previous != settings:
             raise ParameterError(
                 f"{out} holds results made with other settings ({previous}); this run uses "
                 f"{settings}. Use another --out folder or delete the old results."
             )
-    else:
-        payload = json.dumps(settings, indent=2, sort_keys=True).encode()
-        atomic_write(path, lambda file: file.write(payload))
+        if dataset is None or recorded is not None:
+            return
+    payload = json.dumps(current, indent=2, sort_keys=True).encode()
+    atomic_write(path, lambda file: file.write(payload))
 
 
 def _one_line(exc: BaseException) -> str:
@@ -251,8 +331,9 @@ def run_benchmark(dataset_dir, methods: Sequence[str], out_dir, *, n_pairs: int 
         Names from :data:`METHODS`.
     out_dir : path
         Created if missing. Receives ``results.csv`` (one row per pair and
-        method, rewritten atomically after each), ``run.json`` (the settings;
-        a restart with other settings is refused), ``maps/METHOD/S-T.npy``
+        method, rewritten atomically after each), ``run.json`` (the settings
+        and :func:`dataset_identity`; a restart with other settings, or on another dataset or one
+        whose meshes or truth files changed, is refused), ``maps/METHOD/S-T.npy``
         and ``errors/METHOD/S-T.npz`` (per-point errors, for the curves).
     n_pairs : int, optional
         Use a class-stratified sample of this many pairs
@@ -282,7 +363,7 @@ def run_benchmark(dataset_dir, methods: Sequence[str], out_dir, *, n_pairs: int 
     except OSError as exc:
         raise ParameterError(f"Cannot create the output folder {out}: {exc.strerror}.") from exc
     _check_run_settings(out, {"geodesic": geodesic, "random_state": random_state,
-                              "method_options": method_options})
+                              "method_options": method_options}, dataset=dataset_identity(dataset))
     pairs = stratified_sample(dataset.pairs, n_pairs, random_state)
     csv_path = out / "results.csv"
     rows = read_rows(csv_path)

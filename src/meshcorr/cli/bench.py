@@ -25,7 +25,10 @@ error divided by sqrt(target area), and write into --out:
   curves.png    cumulative error curves (needs meshcorr[plot])
 A restarted run with the same --out skips the pairs already done; a method
 that fails on a pair is recorded as 'failed' and the run goes on; the exit
-code is then 4.
+code is then 4. --out/run.json keeps the settings and the dataset's identity
+(its folder, pair list and a hash of each mesh and truth file): a rerun there
+with other settings, on another dataset or on one whose files changed is
+refused before any work (exit 2).
 """
 
 

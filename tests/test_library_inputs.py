@@ -112,3 +112,22 @@ def test_precise_map_refuses_a_basis_larger_than_the_mesh():
     message = str(error.value)
     assert message.startswith(str(fmap_error.value)) and "has 32 vertices" in message and "k <= 31" in message
     assert precise_map(mesh, mesh, identity, k=31).vertex_map().tolist() == identity.tolist()
+
+
+# ---------------------------------------------------------------- cache listings
+
+def test_cache_lists_and_clears_regular_files_only(tmp_path):
+    from meshcorr.cache import ShapeCache
+
+    root = tmp_path / "cache"
+    (root / ("a" * 64 + ".npz")).mkdir(parents=True)  # a folder named like a key: was one prepared shape
+    (root / ("." + "b" * 64 + ".npz.1f.tmp")).mkdir()  # named like a writer's temporary file
+    (root / ("a" * 64 + ".npz") / "inside.txt").write_text("kept")
+    real = root / ("c" * 64 + ".npz")
+    real.write_bytes(b"12345")
+    cache = ShapeCache(root)
+    assert cache.files() == [real]
+    assert cache.info() == {"path": str(root), "files": 1, "bytes": 5}
+    assert cache.clear()["files"] == 1  # unlinking the folders raised IsADirectoryError
+    assert not real.exists() and (root / ("a" * 64 + ".npz") / "inside.txt").read_text() == "kept"
+    assert (root / ("." + "b" * 64 + ".npz.1f.tmp")).is_dir() and cache.files() == []

@@ -85,10 +85,11 @@ class ShapeCache:
         return shape
 
     def files(self) -> list[Path]:
-        """The cache files (complete ones; temporary files of writers under way are not listed)."""
+        """The cache files (complete ones; temporary files of writers under way are not listed, nor a
+        folder or anything else that is no regular file, whatever its name)."""
         if not self.root.is_dir():
             return []
-        return sorted(p for p in self.root.iterdir() if _CACHE_FILE.fullmatch(p.name))
+        return sorted(p for p in self.root.iterdir() if _CACHE_FILE.fullmatch(p.name) and p.is_file())
 
     def info(self) -> dict:
         """``{"path": str, "files": int, "bytes": int}``."""
@@ -96,12 +97,12 @@ class ShapeCache:
         return {"path": str(self.root), "files": len(files), "bytes": sum(_size(p) for p in files)}
 
     def clear(self) -> dict:
-        """Remove every cache file and stale temporary file (named as meshcorr names them, nothing else);
-        returns what :meth:`info` said before."""
+        """Remove every cache file and stale temporary file (files named as meshcorr names them, nothing
+        else: a folder of such a name is left alone); returns what :meth:`info` said before."""
         before = self.info()
         if self.root.is_dir():
             for path in self.root.iterdir():
-                if _CACHE_FILE.fullmatch(path.name) or _TEMPORARY_FILE.fullmatch(path.name):
+                if (_CACHE_FILE.fullmatch(path.name) or _TEMPORARY_FILE.fullmatch(path.name)) and path.is_file():
                     path.unlink(missing_ok=True)
         return before
 

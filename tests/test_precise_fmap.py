@@ -132,3 +132,16 @@ def test_map_quality_known_answers(moved):
     assert scrambled["continuity"] > TEAR_RATIO and scrambled["torn_edges"] > 0.5
     with pytest.raises(ParameterError, match="sends no source vertex"):
         map_quality(source, target, np.full(source.n_vertices, -1))
+
+
+def test_a_results_precise_map_default_basis_fits_a_small_mesh():
+    # The default basis (the refinement's 40 functions) is clipped as the refinement clips it;
+    # a k given beyond the vertex count is refused (precise_map's own check).
+    import meshcorr
+
+    shape = ds.tube(n_along=5, n_around=6)  # 32 vertices
+    result = meshcorr.match(shape, shape)
+    precise = result.precise_map()
+    assert precise.faces.shape == (shape.n_vertices,)
+    with pytest.raises(ParameterError, match="at most n - 1 = 31"):
+        result.precise_map(k=37)

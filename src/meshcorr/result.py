@@ -285,7 +285,9 @@ class Correspondence:
         Parameters
         ----------
         k : int, optional
-            Laplace-Beltrami basis size; default the refinement's (``params["refine_k"]``, else 30).
+            Laplace-Beltrami basis size; default the refinement's (``params["refine_k"]``, else 30),
+            clipped to the smaller mesh's vertex count - 1 as the refinement clips it. A ``k``
+            given larger than that is refused.
         n_nearest : int
             Target vertices whose triangles are searched.
 
@@ -297,7 +299,8 @@ class Correspondence:
         from .precise import precise_map
 
         src, tgt = self._meshes("precise_map")
-        k = int(self.params.get("refine_k", 30)) if k is None else k
+        if k is None:
+            k = min(int(self.params.get("refine_k", 30)), src.n_vertices - 1, tgt.n_vertices - 1)
         return precise_map(src, tgt, self.local_map(), k=k, n_nearest=n_nearest,
                            random_state=self.params.get("random_state", 0))
 

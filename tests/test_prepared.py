@@ -85,8 +85,9 @@ def test_load_refuses_another_mesh_other_settings_and_other_versions(pair, tmp_p
         PreparedShape.load(old)
     garbage = tmp_path / "garbage.npz"
     garbage.write_bytes(b"not a zip")
-    with pytest.raises(PreparedShapeError, match="is not a prepared shape written by meshcorr"):
+    with pytest.raises(PreparedShapeError, match="is not a prepared shape written by meshcorr") as refused:
         PreparedShape.load(garbage)
+    assert "pickle" not in str(refused.value)  # numpy's advice to unpickle is not passed on
     with zipfile.ZipFile(tmp_path / "empty.npz", "w"):
         pass
     with pytest.raises(PreparedShapeError, match="is not a prepared shape"):

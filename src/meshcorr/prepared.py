@@ -426,7 +426,9 @@ def _read(path, *, name: str | None = None) -> tuple[dict, dict]:
     except FileNotFoundError:
         raise PreparedShapeError(f"{name} does not exist.") from None
     except (OSError, ValueError, KeyError, TypeError, UnicodeDecodeError, EOFError, zipfile.BadZipFile) as exc:
-        raise PreparedShapeError(f"{name} is not a prepared shape written by meshcorr ({exc}); prepare the "
+        # NumPy reads any file that is no archive as pickled data and advises allow_pickle: not for users.
+        reason = "it is not an .npz archive" if "pickle" in str(exc) else exc
+        raise PreparedShapeError(f"{name} is not a prepared shape written by meshcorr ({reason}); prepare the "
                                  "mesh again (meshcorr.prepare) or clear the cache (meshcorr cache clear).") from None
     if version != FORMAT_VERSION or header.get("meshcorr") != _version():
         raise PreparedShapeError(

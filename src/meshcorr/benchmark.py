@@ -35,6 +35,7 @@ from .evaluation import THRESHOLDS, GeodesicCache, cumulative_curve, evaluate_ma
 from .ground_truth import load_ground_truth
 from .io import atomic_write
 from .mesh import Mesh, as_mesh
+from .methods import check_options
 
 __all__ = ["METHODS", "Dataset", "FIELDS", "dataset_identity", "load_dataset", "read_rows", "run_benchmark",
            "run_method", "stratified_sample", "summarize", "write_summary"]
@@ -339,7 +340,8 @@ def run_benchmark(dataset_dir, methods: Sequence[str], out_dir, *, n_pairs: int 
         Use a class-stratified sample of this many pairs
         (:func:`stratified_sample`); all pairs by default.
     method_options : dict, optional
-        ``{method: {option: value}}`` passed to that method.
+        ``{method: {option: value}}`` passed to that method; checked before any work
+        (:func:`meshcorr.methods.check_options`).
     geodesic : str
         Geodesic solver of the evaluation.
     random_state : int
@@ -357,6 +359,8 @@ def run_benchmark(dataset_dir, methods: Sequence[str], out_dir, *, n_pairs: int 
     dataset = load_dataset(dataset_dir)
     methods = check_methods(methods)
     method_options = {m: dict(o) for m, o in (method_options or {}).items() if m in methods}
+    for method, options in method_options.items():  # a value every pair would fail on, refused before any work
+        check_options(method, **options)
     out = Path(out_dir)
     try:
         out.mkdir(parents=True, exist_ok=True)

@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import inspect
 import io
 import json
 import logging
@@ -57,7 +58,7 @@ import numpy as np
 
 from ._threads import single_blas_thread
 from .benchmark import _check_run_settings, _one_line
-from .errors import MeshcorrError, OutputError, ParameterError
+from .errors import OutputError, ParameterError
 from .io import atomic_write
 from .modes import SCALABLE_ABOVE
 from .holes import fills, unfilled
@@ -437,8 +438,8 @@ def _workers_ignore_ctrl_c():
 
 
 def _split_options(options: dict) -> tuple[dict, dict]:
-    """The per-shape settings (validated) and the other match options (validated by a dry match)."""
-    from .pipeline import match
+    """The per-shape settings and the other match options, every value checked before any work."""
+    from .methods import check_options, method_function
 
     given = dict(options)
     if "method" in given and given["method"] != "spectral":
@@ -451,17 +452,15 @@ def _split_options(options: dict) -> tuple[dict, dict]:
     settings = shape_settings(**shape)
     settings["fill_holes"] = fills(settings["fill_holes"], partial=given.get("partial"),
                                    bijective=given.get("bijective", False))
-    # Every other option is checked before any work: match validates all its options before it
-    # loads the meshes, so a dry call without meshes raises ParameterError for a bad option and
-    # MeshError (no mesh) once they all passed.
-    try:
-        match(None, None, **given, **settings)
-    except ParameterError:
-        raise
-    except MeshcorrError:
-        pass
-    except TypeError as exc:
-        raise ParameterError(f"Unknown option of meshcorr.batch: {exc}.") from None
+    taken = [key for key in inspect.signature(method_function("spectral")).parameters
+             if key not in ("source", "target")]
+    unknown = sorted(set(given) - set(taken))
+    if unknown:
+        raise ParameterError(f"Unknown option of meshcorr.batch: {unknown[0]!r} is no option of meshcorr.match "
+                             f"(its options are: {', '.join(taken)}).")
+    # Every value as match would check it, those it checks only once the meshes are loaded
+    # (e.g. icp_iterations) included, so that no pair fails for a bad option.
+    check_options("spectral", **given, **settings)
     return settings, given
 
 

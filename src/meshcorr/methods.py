@@ -29,7 +29,7 @@ from .mesh import MeshLike
 from .timing import StageProgress
 
 __all__ = ["METHOD_NAMES", "SPATIAL_METHODS", "applicable", "applicable_options", "changed_options",
-           "method_function", "method_options", "reject_inapplicable", "run_method"]
+           "check_options", "method_function", "method_options", "reject_inapplicable", "run_method"]
 
 #: Method name -> (module, function) of ``f(source, target, **options) -> Correspondence``.
 _REGISTRY: dict[str, tuple[str, str]] = {
@@ -111,15 +111,19 @@ def run_method(name: str, source: MeshLike, target: MeshLike, *, prealign: bool 
     ParameterError
         Unknown method, or an option the method does not take.
     """
-    allowed = method_options(name)
-    unknown = sorted(set(options) - set(allowed))
-    if unknown:
-        raise ParameterError(
-            f"The method {name!r} has no option {unknown[0]!r}. Its options are: {', '.join(allowed)}."
-        )
+    _reject_unknown(name, options, method_options(name))
     if name in SPATIAL_METHODS:
         options["prealign"] = prealign
     return method_function(name)(source, target, random_state=random_state, progress=progress, **options)
+
+
+def _reject_unknown(name: str, options: dict, allowed) -> None:
+    """Raise if ``options`` has a key outside ``allowed``, naming it and the method's own options."""
+    unknown = sorted(set(options) - set(allowed))
+    if unknown:
+        raise ParameterError(
+            f"The method {name!r} has no option {unknown[0]!r}. Its options are: {', '.join(method_options(name))}."
+        )
 
 
 #: Options every method takes (how it runs, not what it computes).
@@ -181,3 +185,108 @@ def reject_inapplicable(name: str, options: dict) -> None:
         raise ParameterError(f"The method {name!r} does not use the option{'s' if len(unused) > 1 else ''} "
                              f"{names}; remove {'them' if len(unused) > 1 else 'it'} or choose a method that "
                              f"uses {'them' if len(unused) > 1 else 'it'}. The options of {name!r} are: {own}.")
+
+
+class _Reached(BaseException):
+    """Raised by a :class:`_NoData` stand-in when a call first uses it: the call's option checks passed.
+
+    A BaseException, so that no ``except Exception`` on the way can take it for a failure.
+    """
+
+
+class _NoData:
+    """Stands for a method's data (a mesh, points, an embedding, a vertex count) in :func:`check_options`.
+
+    It has a ``shape`` when given ``dims`` (the checks of :func:`meshcorr.icp.tps_icp` read the
+    embedding's dimension); any other use of it (an attribute, ``len``, arithmetic, a comparison,
+    numpy's conversion) raises :class:`_Reached`.
+    """
+
+    def __init__(self, dims: int | None = None) -> None:
+        if dims is not None:
+            self.shape = (0, dims)
+
+    def __getattr__(self, name):
+        raise _Reached(name)
+
+    def _reached(self, *args, **kwargs):
+        raise _Reached("data")
+
+    __len__ = __iter__ = __getitem__ = __array__ = __index__ = __int__ = __float__ = __bool__ = _reached
+    __lt__ = __le__ = __gt__ = __ge__ = __add__ = __radd__ = __sub__ = __rsub__ = __mul__ = __rmul__ = _reached
+    __truediv__ = __rtruediv__ = _reached
+
+
+#: Options a method checks only once its data is loaded, where it passes them on: per method,
+#: (module, function, {option: that function's keyword}, its data as stand-ins given the options).
+#: Each of these functions checks its options before it first uses its data.
+_LATER_CHECKS: dict[str, tuple] = {
+    "spectral": (
+        # Step 5's thin-plate-spline ICP (its n_control needs the embedding's k - 1 dimensions).
+        ("meshcorr.icp", "tps_icp", {"icp_iterations": "max_iter", "n_control": "n_control", "anneal": "anneal"},
+         lambda o: {"X": _NoData(o["k"] - 1), "Y": _NoData(o["k"] - 1)}),
+        ("meshcorr.modes", "select_mode", {"mode": "mode", "scalable_above": "scalable_above"},
+         lambda o: {"n1": _NoData(), "n2": _NoData(), "max_memory": None}),
+    ),
+    "tps-rpm": (
+        ("meshcorr.baselines.tps_rpm", "tps_rpm",
+         {key: key for key in ("lambda_init", "affine_init", "anneal_rate", "inner_iterations")},
+         lambda o: {"V": _NoData(3), "X": _NoData(3)}),
+    ),
+    "icp": (
+        ("meshcorr.baselines.rigid_icp", "rigid_icp",
+         {key: key for key in ("trim", "huber", "with_scale", "n_rotations", "max_iter")},
+         lambda o: {"P": _NoData(3), "Q": _NoData(3)}),
+    ),
+}
+
+
+def _checks_of(function: Callable, **arguments) -> None:
+    """Call ``function`` on stand-in data until it first uses the data (its checks are done by then)."""
+    try:
+        function(**arguments)
+    except _Reached:
+        pass
+
+
+def check_options(name: str, **options) -> None:
+    """Raise the :class:`ParameterError` that method ``name`` would raise for ``options``, before any work.
+
+    The method's own checks decide: its function (:func:`method_function`, e.g.
+    :func:`meshcorr.match` for ``"spectral"``) is called with stand-ins for the
+    source and target that stop it when it first loads them, and the options it
+    checks only later, where it passes them on (e.g. ``icp_iterations`` in
+    :func:`meshcorr.icp.tps_icp`), are checked by the functions that take
+    them, on stand-in data. Nothing is loaded or computed: use it to refuse a
+    bad setting before a long run (``meshcorr bench --set``, :func:`meshcorr.collection.batch`)
+    instead of failing every pair.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`METHOD_NAMES`.
+    **options
+        Keywords of the method's function other than ``source`` and
+        ``target`` (its own options, and ``random_state``, ``progress`` and
+        ``prealign`` where it takes them).
+
+    Raises
+    ------
+    ParameterError
+        An unknown method or option, or a value the method refuses (the
+        method's message, e.g. "The 'k' parameter must be an int >= 2. Got -3
+        instead."). Checks that need the meshes (``landmarks``, ``n_anchors``
+        against the vertex count) are left to the run.
+    """
+    function = method_function(name)
+    parameters = inspect.signature(function).parameters
+    _reject_unknown(name, options, [key for key in parameters if key not in ("source", "target")])
+    call = dict(options, source=_NoData(), target=_NoData())
+    if call.get("progress") is True:  # it passes the checks as False does, without drawing a bar
+        call["progress"] = False
+    _checks_of(function, **call)
+    given = {key: p.default for key, p in parameters.items() if p.default is not inspect.Parameter.empty}
+    given.update(options)
+    for module, later, keywords, data in _LATER_CHECKS.get(name, ()):
+        _checks_of(getattr(importlib.import_module(module), later), **data(given),
+                   **{keyword: given[option] for option, keyword in keywords.items()})

@@ -90,7 +90,9 @@ def add_parser(sub) -> None:
                    help="close each shape's holes before matching, as 'meshcorr match --fill-holes' "
                         "(default: on)")
     g.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="any other option of meshcorr.match, e.g. --set symmetry=cost (repeatable)")
+                   help="any other option of meshcorr.match, e.g. --set symmetry=cost (repeatable; VALUE is a "
+                        "Python literal such as 8, 0.5, True or None, other text a string). A value meshcorr.match "
+                        "refuses stops the batch before any work (exit 2)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     p.set_defaults(run=run)
 
@@ -131,18 +133,28 @@ FLAGGED = {"k": "-k", "geodesic": "--geodesic", "random_state": "--seed", "refin
            "fill_holes": "--fill-holes / --no-fill-holes"}
 
 
-def _options(items: list[str]) -> dict:
-    from ..errors import ParameterError
-    from .bench import _value
+def _options(items: list[str], flags: dict | None = None) -> dict:
+    """The options of meshcorr.match: ``flags`` (given by this command's flags), then each --set KEY=VALUE.
 
-    options = {}
+    Each is checked as :func:`meshcorr.collection.batch` checks its options (every value as
+    meshcorr.match would take it, :func:`meshcorr.methods.check_options`), before any work: a
+    value that every pair would fail on names its --set item.
+    """
+    from ..collection import _split_options
+    from ..errors import ParameterError
+    from .bench import _value, checked_set
+
+    options = dict(flags or {})
+    _split_options(options)  # the flags alone
     for item in items:
         key, eq, value = item.partition("=")
         if not eq or not key:
             raise ParameterError(f"--set takes KEY=VALUE, e.g. symmetry=cost; got {item!r}.")
         if key.strip() in FLAGGED:
             raise ParameterError(f"--set {item}: {key.strip()} has its own option here, {FLAGGED[key.strip()]}.")
-        options[key.strip()] = _value(value)
+        given = dict(options, **{key.strip(): _value(value)})
+        checked_set(item, lambda: _split_options(given))
+        options = given
     return options
 
 
@@ -176,14 +188,15 @@ def run(args) -> int:
     from ..collection import batch
 
     pairs = _pairs(args)
-    options = dict(_options(args.set), k=args.k, geodesic=args.geodesic, random_state=args.seed,
-                   refine=args.refine, shells=args.shells, mode=args.mode, n_samples=args.samples)
+    flags = dict(k=args.k, geodesic=args.geodesic, random_state=args.seed, refine=args.refine, shells=args.shells,
+                 mode=args.mode, n_samples=args.samples)
     if args.oriented_starts:
-        options["oriented_starts"] = True
+        flags["oriented_starts"] = True
     if args.partial is not None:
-        options["partial"] = args.partial
+        flags["partial"] = args.partial
     if not args.fill_holes:
-        options["fill_holes"] = False
+        flags["fill_holes"] = False
+    options = _options(args.set, flags)
     client = None
     if args.scheduler:
         from ..collection import connect

@@ -7,6 +7,7 @@ import ast
 import sys
 import time
 from pathlib import Path
+from typing import Callable
 
 from ..geodesics import GEODESIC_METHODS
 from .match import seed
@@ -28,7 +29,7 @@ that fails on a pair is recorded as 'failed' and the run goes on; the exit
 code is then 4. --out/run.json keeps the settings and the dataset's identity
 (its folder, pair list and a hash of each mesh and truth file): a rerun there
 with other settings, on another dataset or on one whose files changed is
-refused before any work (exit 2).
+refused before any work (exit 2), as is a --set value that its method refuses.
 """
 
 
@@ -50,8 +51,10 @@ def add_parser(sub) -> None:
     g.add_argument("--geodesic", choices=GEODESIC_METHODS, default=None,
                    help="geodesic solver of the spectral methods (default: each method's)")
     g.add_argument("--set", action="append", default=[], metavar="METHOD:KEY=VALUE",
-                   help="any option of one method, e.g. --set spectral:reorder=greedy (repeatable; "
-                        "the seed is --seed)")
+                   help="any option of one method, e.g. --set spectral:reorder=greedy or --set icp:trim=0.8 "
+                        "(repeatable; VALUE is a Python literal such as 8, 0.5, True or None, other text a "
+                        "string; the seed is --seed). A value the method refuses stops the run before any "
+                        "work (exit 2)")
     p.add_argument("--eval-geodesic", choices=GEODESIC_METHODS, default="heat",
                    help="geodesic solver of the evaluation (default: heat)")
     p.add_argument("--seed", type=seed, default=0, help="seed of the sample and of every method (default: 0)")
@@ -99,6 +102,7 @@ def method_options(methods: list[str], k, geodesic, settings: list[str]) -> dict
     """``{method: {option: value}}`` from -k, --geodesic and --set METHOD:KEY=VALUE."""
     from ..benchmark import SPECTRAL_FAMILY
     from ..errors import ParameterError
+    from ..methods import check_options
 
     try:  # the baselines say which options each method takes
         from ..baselines import method_options as takes
@@ -123,8 +127,29 @@ def method_options(methods: list[str], k, geodesic, settings: list[str]) -> dict
         if key not in allowed:
             raise ParameterError(f"--set {item!r}: the method {method!r} has no option {key!r}. Its options are: "
                                  f"{', '.join(allowed)}.")
-        options[method][key] = _value(value)
+        given = dict(options[method], **{key: _value(value)})
+        checked_set(item, lambda: check_options(method, **given))  # a value every pair would fail on
+        options[method] = given
     return {m: o for m, o in options.items() if o}
+
+
+#: The fix named after a --set item that its method refuses.
+SET_FIX = ("Correct this --set (its VALUE is read as a Python literal such as 8, 0.5, True or None; other text "
+           "is a string, e.g. reorder=greedy), or leave it out to keep the method's default.")
+
+
+def checked_set(item: str, check: Callable[[], object]) -> None:
+    """Run ``check()``, which raises the method's ParameterError for options with --set ``item`` in them.
+
+    The error is raised again as one paragraph: the --set item, the method's message (the
+    option, the value, what is allowed) and the fix.
+    """
+    from ..errors import ParameterError
+
+    try:
+        check()
+    except ParameterError as exc:
+        raise ParameterError(f"--set {item!r}: {exc} {SET_FIX}") from None
 
 
 class PairProgress:

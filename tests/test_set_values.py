@@ -212,3 +212,17 @@ def test_help_says_set_values_are_literals_checked_before_any_work(capsys, comma
         main([command, "--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert "Python literal such as 8, 0.5, True or None" in text and "before any work (exit 2)" in text
+
+
+@pytest.mark.parametrize("method, option", [("icp", "prealign"), ("icp", "bijective"),
+                                            ("shapiro-brady", "largest_component")])
+def test_baseline_switches_take_only_true_or_false(method, option):
+    # "false" from a --set is no Python literal: it stayed the string 'false', and ran as True.
+    from meshcorr import datasets
+    from meshcorr.methods import run_method
+
+    with pytest.raises(ParameterError, match=f"'{option}' parameter must be True or False"):
+        check_options(method, **{option: "false"})
+    shape = datasets.tube(n_along=6, n_around=6)
+    with pytest.raises(ParameterError, match=f"'{option}' parameter must be True or False"):
+        run_method(method, shape, shape, **{option: "false"})

@@ -23,7 +23,7 @@ import importlib
 import inspect
 from typing import Callable
 
-from ._params import check_choice
+from ._params import check_bool, check_choice
 from .errors import ParameterError
 from .mesh import MeshLike
 from .timing import StageProgress
@@ -114,7 +114,20 @@ def run_method(name: str, source: MeshLike, target: MeshLike, *, prealign: bool 
     _reject_unknown(name, options, method_options(name))
     if name in SPATIAL_METHODS:
         options["prealign"] = prealign
+    _check_switches(method_function(name), options)
     return method_function(name)(source, target, random_state=random_state, progress=progress, **options)
+
+
+def _check_switches(function, options: dict) -> None:
+    """Options whose default is True or False must be True or False (:func:`meshcorr._params.check_bool`).
+
+    The baselines took any value as a switch, so the string ``"false"`` (e.g. from
+    ``--set icp:prealign=false``, which is no Python literal) ran as True.
+    """
+    parameters = inspect.signature(function).parameters
+    for key, value in options.items():
+        if key in parameters and isinstance(parameters[key].default, bool):
+            check_bool(key, value)
 
 
 def _reject_unknown(name: str, options: dict, allowed) -> None:
@@ -281,6 +294,7 @@ def check_options(name: str, **options) -> None:
     function = method_function(name)
     parameters = inspect.signature(function).parameters
     _reject_unknown(name, options, [key for key in parameters if key not in ("source", "target")])
+    _check_switches(function, options)
     call = dict(options, source=_NoData(), target=_NoData())
     if call.get("progress") is True:  # it passes the checks as False does, without drawing a bar
         call["progress"] = False

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import os
 import warnings
 
@@ -505,3 +506,14 @@ def test_plain_off_fast_reader_agrees_with_trimesh(tmp_path, text):
     np.testing.assert_array_equal(vertices, np.asarray(reference.vertices, dtype=np.float64))
     np.testing.assert_array_equal(faces, np.asarray(reference.faces, dtype=np.int64))
     assert vertices.dtype == np.float64 and faces.dtype == np.int64 and faces.shape == (2, 3)
+
+
+def test_a_damaged_stl_is_one_error_without_trimesh_log_lines(tmp_path, caplog):
+    # trimesh logs a traceback for each parser that fails; read_mesh's MeshError says what is wrong.
+    path = tmp_path / "normals.stl"
+    path.write_text("solid t\nfacet normal 0 0 x\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n"
+                    "endloop\nendfacet\nendsolid t\n")
+    with caplog.at_level("DEBUG"):
+        read_mesh(path)
+    assert not [r for r in caplog.records if r.name.startswith("trimesh")]
+    assert logging.getLogger("trimesh").level == logging.NOTSET  # restored

@@ -194,6 +194,22 @@ def _read_npy(path: Path, label: str) -> np.ndarray:
     return np.array(points, dtype=np.float64)
 
 
+@contextmanager
+def quiet_trimesh():
+    """Hide trimesh's log lines while it parses: on a damaged file it logs the traceback of each parser
+    it tries in turn, and the :class:`MeshError` raised here says what was wrong (library code does
+    not print). The level of the ``trimesh`` logger is restored afterwards."""
+    import logging
+
+    logger = logging.getLogger("trimesh")
+    level = logger.level
+    logger.setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
+
+
 def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Read a triangle mesh or a point cloud, keeping vertex order.
 
@@ -291,7 +307,7 @@ def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]
     try:
         # trimesh's parsers catch BaseException in places (fast path, then a fallback): a
         # Ctrl-C there would be swallowed, so it is delivered once the parse ends.
-        with deferred_interrupt():
+        with deferred_interrupt(), quiet_trimesh():
             scene = trimesh.load(io.BytesIO(data), file_type=fmt.lower(), process=False, force="scene",
                                  **options)
     except Exception as exc:  # trimesh raises many types on corrupt input

@@ -8,13 +8,12 @@ errors into one-line messages with a non-zero exit code.
 from __future__ import annotations
 
 import argparse
-import logging
 import sys
 import warnings
-from contextlib import contextmanager
 
 from .. import __version__
 from ..errors import InputError, MeshcorrError, MeshError, MeshWarning
+from ..io import quiet_trimesh
 from . import batch as _batch
 from . import bench as _bench
 from . import cache as _cache
@@ -112,7 +111,7 @@ def main(argv: list[str] | None = None) -> int:
                 return EXIT_USAGE
             if args.quiet and args.verbose:
                 parser.error("-q/--quiet and -v/--verbose contradict each other; give one")
-            with warnings.catch_warnings(), _quiet_trimesh():
+            with warnings.catch_warnings(), quiet_trimesh():
                 warnings.showwarning = _show_warning
                 if args.quiet:
                     warnings.simplefilter("ignore", MeshWarning)
@@ -137,18 +136,6 @@ def main(argv: list[str] | None = None) -> int:
             print(f"meshcorr: internal error: {type(exc).__name__}: {exc}. "
                   "Run again with --debug for the traceback and report it.", file=sys.stderr)
             return EXIT_ERROR
-
-
-@contextmanager
-def _quiet_trimesh():
-    """Hide trimesh's log lines (tracebacks of the parsers it tries in turn): read_mesh's error says it."""
-    logger = logging.getLogger("trimesh")
-    level = logger.level
-    logger.setLevel(logging.CRITICAL)
-    try:
-        yield
-    finally:
-        logger.setLevel(level)
 
 
 def _silence_stdout() -> None:

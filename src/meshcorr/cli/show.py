@@ -123,6 +123,7 @@ def run(args) -> int:
     from ..plots import require_matplotlib
     from ..viz.figures import correspondence_figure
     from ..io import check_outputs
+    from ._progress import StageProgress
 
     check_png(args.output)
     check_outputs({"-o": args.output}, {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map,
@@ -139,10 +140,13 @@ def run(args) -> int:
         target = read_mesh(args.target, name=args.target)
     mapping = read_checked_map(args.map, len(source[0]), len(target[0]))
     truth = dense_truth(args.gt, len(source[0]), len(target[0])) if args.gt else None
+    # The geodesic errors against --gt take minutes on large meshes: say how far they are (as evaluate).
+    progress = None if args.quiet else StageProgress(sys.stderr, delay=0.0 if args.verbose else 1.0,
+                                                     label=f"{args.map} on {args.target}")
     info = correspondence_figure(source, target, mapping, args.output, truth=truth,
                                  error=args.error, coloring=args.coloring, geodesic=args.geodesic,
                                  elev=args.elev, azim=args.azim, up=args.up, dpi=args.dpi,
-                                 map_name=args.map)
+                                 map_name=args.map, progress=progress)
     line = f"wrote {args.output}"
     if info:
         line += f" (geodesic error / sqrt(area): mean {info['mean_error']:.4f})"

@@ -10,13 +10,16 @@
 
 from __future__ import annotations
 
+from contextlib import contextmanager
+
 import numpy as np
 
 from .._params import check_int
 from ..embedding import gaussian_affinity, top_eigenpairs
 from ..errors import ParameterError
-from ..evaluation import geodesic_errors
+from ..evaluation import GeodesicCache, geodesic_errors
 from ..mesh import as_mesh
+from ..progress import as_progress
 from ..transfer import check_map, pull_back
 from .colors import UNMAPPED_COLOR, mesh_coloring, scalar_colors
 from .render import Panel, render_panels
@@ -25,7 +28,8 @@ __all__ = ["correspondence_errors", "correspondence_figure", "spectrum_figure"]
 
 
 def correspondence_errors(target, mapping: np.ndarray, truth: np.ndarray, *,
-                          geodesic: str = "heat") -> np.ndarray:
+                          geodesic: str = "heat", cache: GeodesicCache | None = None,
+                          progress=None) -> np.ndarray:
     """Geodesic error of each source vertex, normalised by sqrt(target area).
 
     Parameters
@@ -36,19 +40,72 @@ def correspondence_errors(target, mapping: np.ndarray, truth: np.ndarray, *,
         Predicted and true target vertex of each source vertex (-1: none).
     geodesic : str
         Geodesic solver.
+    cache : GeodesicCache, optional
+        Reuse geodesic rows across calls (its solver must be ``geodesic``);
+        e.g. the one given to :func:`meshcorr.evaluation.evaluate_map` for
+        the same target.
+    progress : callable or bool, optional
+        ``progress("geodesic errors", done, total)`` as the single-source
+        solves advance (``done`` of ``total`` solves, from 0 to ``total``;
+        nothing when every row is cached), or True for a progress bar. The
+        errors are the same with or without it.
 
     Returns
     -------
     errors : (n_source,) float
         NaN where either map leaves the vertex unmapped.
     """
+    progress = as_progress(progress)
     mapping, truth = np.asarray(mapping), np.asarray(truth)
     both = (mapping >= 0) & (truth >= 0)
     errors = np.full(len(mapping), np.nan)
     if both.any():
         mesh = as_mesh(target, name="target")
-        errors[both] = geodesic_errors(mesh, mapping[both], truth[both], method=geodesic)
+        if progress is not None:
+            cache = _ReportingCache(cache if cache is not None else GeodesicCache(geodesic), progress)
+        errors[both] = geodesic_errors(mesh, mapping[both], truth[both], method=geodesic, cache=cache)
     return errors
+
+
+class _ReportingCache:
+    """A view of a :class:`GeodesicCache` whose solves report ``progress("geodesic errors", done, total)``.
+
+    ``pair_distances`` is the cache's own (it picks the rows to solve: the same rows with or without
+    progress); only its call to ``precompute`` goes through here, which solves the rows in blocks and
+    reports after each. Everything else (the rows, ``n_solves``, ``method``) is the wrapped cache's, so a
+    cache passed in keeps the rows solved here.
+    """
+
+    stage = "geodesic errors"
+
+    def __init__(self, cache: GeodesicCache, progress) -> None:
+        self._cache, self._progress = cache, progress
+
+    def __getattr__(self, name: str):
+        return getattr(self._cache, name)
+
+    pair_distances = GeodesicCache.pair_distances
+
+    def precompute(self, mesh, vertices) -> None:
+        vertices = np.unique(np.asarray(vertices, dtype=np.int64))
+        if vertices.size == 0:
+            return
+        # About 100 reports; a block of at most 256 solves (GeodesicCache's own block).
+        block = int(min(256, max(1, -(-vertices.size // 100))))
+        self._progress(self.stage, 0, vertices.size)
+        for start in range(0, vertices.size, block):
+            self._cache.precompute(mesh, vertices[start:start + block])
+            self._progress(self.stage, min(start + block, vertices.size), vertices.size)
+
+
+@contextmanager
+def _stage(progress, name: str):
+    """Report a stage without sub-steps: ``(name, 0, 1)`` before it, ``(name, 1, 1)`` once done."""
+    if progress is not None:
+        progress(name, 0, 1)
+    yield
+    if progress is not None:
+        progress(name, 1, 1)
 
 
 def _vertices_faces(mesh, name: str) -> tuple[np.ndarray, np.ndarray]:
@@ -62,7 +119,8 @@ def _vertices_faces(mesh, name: str) -> tuple[np.ndarray, np.ndarray]:
 def correspondence_figure(source, target, mapping, path, *, truth=None, error: bool = False,
                           coloring: str = "parts", geodesic: str = "heat", elev: float = 30.0,
                           azim: float = -60.0, up: str = "z", dpi: int = 100,
-                          map_name: str = "the map") -> dict:
+                          map_name: str = "the map", cache: GeodesicCache | None = None,
+                          progress=None) -> dict:
     """Picture of a vertex map by colour transfer, written as a PNG.
 
     The target is coloured by ``coloring``; source vertex ``i`` takes the
@@ -92,6 +150,15 @@ def correspondence_figure(source, target, mapping, path, *, truth=None, error: b
         Camera and resolution (see :func:`meshcorr.viz.render.render_panels`).
     map_name : str
         How error messages refer to the map (e.g. its file name).
+    cache : GeodesicCache, optional
+        Geodesic rows to reuse for the errors (its solver must be ``geodesic``).
+    progress : callable or bool, optional
+        ``progress(stage, done, total)`` as the long work advances, or True
+        for a progress bar (:class:`meshcorr.progress.TqdmProgress`): the
+        stage "geodesic errors" (with ``truth``; ``done`` of ``total``
+        single-source solves, which take minutes on meshes of tens of
+        thousands of vertices), then "drawing" (``0`` then ``1`` of ``1``).
+        Nothing is printed; the picture is the same with or without it.
 
     Returns
     -------
@@ -104,6 +171,7 @@ def correspondence_figure(source, target, mapping, path, *, truth=None, error: b
     ParameterError
         If a map does not fit the meshes, or ``error`` is set without ``truth``.
     """
+    progress = as_progress(progress)
     (V1, F1), (V2, F2) = _vertices_faces(source, "source"), _vertices_faces(target, "target")
     target = (V2, F2)
     mapping = check_map(mapping, len(V1), len(V2), name=map_name)
@@ -116,7 +184,8 @@ def correspondence_figure(source, target, mapping, path, *, truth=None, error: b
     target_panel = Panel(V2, F2, target_colors, f"target ({len(V2)} vertices), coloured by {coloring}")
     info: dict = {}
     if truth is not None:
-        errors = correspondence_errors(target, mapping, truth, geodesic=geodesic)
+        errors = correspondence_errors(target, mapping, truth, geodesic=geodesic, cache=cache,
+                                       progress=progress)
         if np.isfinite(errors).any():
             info = {"mean_error": float(np.nanmean(errors)), "max_error": float(np.nanmax(errors))}
     if error:
@@ -137,12 +206,13 @@ def correspondence_figure(source, target, mapping, path, *, truth=None, error: b
     footer = None
     if info:
         footer = f"geodesic error / sqrt(area): mean {info['mean_error']:.4f}, max {info['max_error']:.4f}"
-    render_panels(panels, path, ncols=2, elev=elev, azim=azim, up=up, dpi=dpi, footer=footer)
+    with _stage(progress, "drawing"):
+        render_panels(panels, path, ncols=2, elev=elev, azim=azim, up=up, dpi=dpi, footer=footer)
     return info
 
 
 def affinity_eigenpairs(vertices, faces, k: int, *, geodesic: str = "heat",
-                        random_state: int | None = 0) -> tuple[np.ndarray, np.ndarray]:
+                        random_state: int | None = 0, progress=None) -> tuple[np.ndarray, np.ndarray]:
     """Top ``k`` eigenpairs of a mesh's Gaussian geodesic affinity matrix.
 
     Parameters
@@ -152,6 +222,10 @@ def affinity_eigenpairs(vertices, faces, k: int, *, geodesic: str = "heat",
     k : int
     geodesic : str
     random_state : int or None
+    progress : callable or bool, optional
+        ``progress(stage, done, total)``: "geodesics" (``done`` of ``n``
+        single-source solves, from 0 to ``n``), then "eigenvectors" (``0``
+        then ``1`` of ``1``); or True for a progress bar.
 
     Returns
     -------
@@ -160,15 +234,27 @@ def affinity_eigenpairs(vertices, faces, k: int, *, geodesic: str = "heat",
     eigenvectors : (n, k) float
         Unit columns, signs by :func:`meshcorr.embedding.sign_convention`.
     """
+    progress = as_progress(progress)
     mesh = as_mesh((vertices, faces), name="mesh", min_vertices=k + 2,
                    reason=f"{k} eigenvectors need at least {k + 2} vertices.")
-    D = np.array(mesh.geodesic_matrix(geodesic))
-    return top_eigenpairs(gaussian_affinity(D, overwrite=True), k, random_state=random_state)
+    solves, reported = None, [0]
+    if progress is not None:
+        progress("geodesics", 0, mesh.n_vertices)
+
+        def solves(done: int, total: int) -> None:
+            reported[0] = done
+            progress("geodesics", done, total)
+
+    D = np.array(mesh.geodesic_matrix(geodesic, progress=solves))
+    if progress is not None and reported[0] < mesh.n_vertices:  # "dijkstra" solves all rows at once
+        progress("geodesics", mesh.n_vertices, mesh.n_vertices)
+    with _stage(progress, "eigenvectors"):
+        return top_eigenpairs(gaussian_affinity(D, overwrite=True), k, random_state=random_state)
 
 
 def spectrum_figure(vertices, faces, path, *, n_eigenvectors: int = 6, geodesic: str = "heat",
                     scale: bool = True, random_state: int | None = 0, elev: float = 30.0,
-                    azim: float = -60.0, up: str = "z", dpi: int = 100) -> np.ndarray:
+                    azim: float = -60.0, up: str = "z", dpi: int = 100, progress=None) -> np.ndarray:
     """Eigenvectors and spectral embedding of a mesh, written as a PNG.
 
     The first panel is the mesh coloured by part; the second is the 3-D
@@ -195,6 +281,13 @@ def spectrum_figure(vertices, faces, path, *, n_eigenvectors: int = 6, geodesic:
         Seed of the eigensolver's start vector.
     elev, azim, up, dpi
         Camera and resolution (see :func:`meshcorr.viz.render.render_panels`).
+    progress : callable or bool, optional
+        ``progress(stage, done, total)`` as the long work advances, or True
+        for a progress bar (:class:`meshcorr.progress.TqdmProgress`): the
+        stages "geodesics" (``done`` of ``n`` single-source solves: the
+        ``n x n`` geodesic matrix, minutes on meshes of several thousand
+        vertices), "eigenvectors" and "drawing" (``0`` then ``1`` of ``1``).
+        Nothing is printed; the picture is the same with or without it.
 
     Returns
     -------
@@ -202,11 +295,12 @@ def spectrum_figure(vertices, faces, path, *, n_eigenvectors: int = 6, geodesic:
         Descending.
     """
     n_eigenvectors = check_int("n_eigenvectors", n_eigenvectors, minimum=1, maximum=30)
+    progress = as_progress(progress)
     vertices = np.asarray(vertices, dtype=np.float64)
     faces = np.asarray(faces, dtype=np.int64)
     k = max(n_eigenvectors, 8)
     values, vectors = affinity_eigenpairs(vertices, faces, k, geodesic=geodesic,
-                                          random_state=random_state)
+                                          random_state=random_state, progress=progress)
     colors = mesh_coloring("parts", vertices, faces)
     embedding = vectors[:, 1:4]
     if scale:
@@ -219,6 +313,7 @@ def spectrum_figure(vertices, faces, path, *, n_eigenvectors: int = 6, geodesic:
         panels.append(Panel(vertices, faces, scalar_colors(u, "coolwarm", vmin=-bound, vmax=bound),
                             f"u{j + 1}, \N{GREEK SMALL LETTER LAMDA} = {values[j]:.4g}"))
     listed = ", ".join(f"{v:.4g}" for v in values[:8])
-    render_panels(panels, path, ncols=4, elev=elev, azim=azim, up=up, dpi=dpi,
-                  panel_size=(3.2, 2.8), footer=f"eigenvalues \N{GREEK SMALL LETTER LAMDA}1..8: {listed}")
+    with _stage(progress, "drawing"):
+        render_panels(panels, path, ncols=4, elev=elev, azim=azim, up=up, dpi=dpi, panel_size=(3.2, 2.8),
+                      footer=f"eigenvalues \N{GREEK SMALL LETTER LAMDA}1..8: {listed}")
     return values

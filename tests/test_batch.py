@@ -485,9 +485,11 @@ def test_ctrl_c_in_a_terminal_stops_the_local_cluster_without_worker_tracebacks(
     import sys
 
     paths, _ = shapes
+    # preexec_fn: the default SIGINT, even where pytest was started with it ignored (a background job).
     run = subprocess.Popen([sys.executable, "-m", "meshcorr", "batch", "--all-pairs", *paths,
                             "--out", str(tmp_path / "out"), "--workers", "2"],
-                           stderr=subprocess.PIPE, text=True, start_new_session=True)
+                           stderr=subprocess.PIPE, text=True, start_new_session=True,
+                           preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     for line in run.stderr:  # the first progress line: the cluster runs and the pairs are submitted
         if line.startswith("[batch]"):
             break

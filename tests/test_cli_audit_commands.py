@@ -145,11 +145,8 @@ def test_evaluate_largest_component(files, capsys):
     assert report["n_points"] == truth.size and report["mean_error"] == pytest.approx(0.0)
 
 
-def test_evaluate_reports_progress_of_the_geodesic_solves(files, capsys, monkeypatch):
-    import meshcorr.cli.evaluate as evaluate
-
+def test_evaluate_reports_progress_of_the_geodesic_solves(files, capsys):
     _, p, _ = files
-    monkeypatch.setattr(evaluate, "_BLOCK", 16)
     code, _, err = _run(["evaluate", p["src"], p["tgt"], p["off_by_one"], "--gt", p["map"], "-v"], capsys)
     assert code == 0 and "[geodesic errors] 100%" in err
     code, _, err = _run(["evaluate", p["src"], p["tgt"], p["off_by_one"], "--gt", p["map"], "-q"], capsys)

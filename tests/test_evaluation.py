@@ -222,3 +222,25 @@ def test_identity_and_spec_errors():
         load_ground_truth(["a", "b", "c"], n_source=3, n_target=3)
     with pytest.raises(ParameterError, match="as many source as target"):
         GroundTruth([0, 1], [0])
+
+
+def test_a_cache_reports_its_solves_and_keeps_the_same_rows(sphere):
+    calls = []
+    rng = np.random.default_rng(4)
+    a, b = rng.integers(0, len(sphere.vertices), size=(2, 300))
+    quiet = GeodesicCache().pair_distances(sphere, a, b)
+    cache = GeodesicCache(progress=lambda *call: calls.append(call))
+    np.testing.assert_array_equal(cache.pair_distances(sphere, a, b), quiet)
+    assert {stage for stage, _, _ in calls} == {"geodesic errors"}
+    done = [d for _, d, _ in calls]
+    assert done[0] == 0 and done[-1] == cache.n_solves > 0 and done == sorted(done) and len(done) > 10
+    assert all(total == cache.n_solves for _, _, total in calls)
+    # reporting(): another callback for a block, then the cache's own again; cached rows report nothing.
+    other, later = [], []
+    with cache.reporting(lambda *call: other.append(call)):
+        cache.pair_distances(sphere, a, b)
+        cache.pair_distances(sphere, (a[:5] + 1) % len(sphere.vertices), (b[:5] + 2) % len(sphere.vertices))
+    assert cache.progress is not None and other and other[-1][1] == other[-1][2]
+    calls.clear()
+    cache.pair_distances(sphere, a, b)
+    assert calls == []

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import hashlib
 from collections import OrderedDict
+from contextlib import contextmanager
 from typing import Sequence
 
 import numpy as np
@@ -50,6 +51,7 @@ from .errors import ParameterError
 from .geodesics import GEODESIC_METHODS, geodesic_solver
 from .ground_truth import GroundTruth
 from .mesh import Mesh, MeshLike, as_mesh
+from .progress import as_progress
 
 __all__ = ["THRESHOLDS", "TEAR_RATIO", "GeodesicCache", "cumulative_curve", "evaluate_map",
            "feature_point_accuracy", "geodesic_errors", "map_quality", "scalar_summary"]
@@ -75,6 +77,12 @@ class GeodesicCache:
     max_meshes : int
         Meshes whose rows are kept; the least recently used is dropped
         beyond that (each holds up to ``n_rows x n`` float32 values).
+    progress : callable or bool, optional
+        ``progress("geodesic errors", done, total)`` as the single-source
+        solves of a :meth:`precompute` advance (``done`` of ``total``
+        solves, from 0 to ``total``, about 100 reports; nothing when every
+        row is cached), or True for a progress bar. The rows are the same
+        with or without it. :meth:`reporting` sets it for a block.
 
     Attributes
     ----------
@@ -82,11 +90,26 @@ class GeodesicCache:
         Single-source solves done so far (for tests and reports).
     """
 
-    def __init__(self, method: str = "heat", *, max_meshes: int = 2) -> None:
+    #: The stage named in the progress reports.
+    STAGE = "geodesic errors"
+    #: Most single-source solves per call of the solver (and between two progress reports).
+    BLOCK = 256
+
+    def __init__(self, method: str = "heat", *, max_meshes: int = 2, progress=None) -> None:
         self.method = check_choice("geodesic", method, GEODESIC_METHODS)
         self.max_meshes = check_int("max_meshes", max_meshes, minimum=1)
+        self.progress = as_progress(progress)
         self.n_solves = 0
         self._entries: OrderedDict[str, dict] = OrderedDict()
+
+    @contextmanager
+    def reporting(self, progress):
+        """Within the block, the solves report to ``progress`` (as the ``progress`` parameter); then as before."""
+        previous, self.progress = self.progress, as_progress(progress)
+        try:
+            yield self
+        finally:
+            self.progress = previous
 
     def _entry(self, mesh: Mesh) -> dict:
         digest = hashlib.blake2b(digest_size=16)
@@ -118,11 +141,18 @@ class GeodesicCache:
             return
         if entry["solver"] is None:
             entry["solver"] = geodesic_solver(mesh.vertices, mesh.faces, self.method)
-        for block in range(0, todo.size, 256):
-            sources = todo[block:block + 256]
+        progress = self.progress
+        # Blocks of at most BLOCK solves; reported, about 100 of them, each as it ends.
+        block = self.BLOCK if progress is None else min(self.BLOCK, -(-todo.size // 100))
+        if progress is not None:
+            progress(self.STAGE, 0, todo.size)
+        for start in range(0, todo.size, block):
+            sources = todo[start:start + block]
             rows = entry["solver"].distances(sources).astype(np.float32)
             entry["rows"].update(zip(sources.tolist(), rows))
             self.n_solves += sources.size
+            if progress is not None:
+                progress(self.STAGE, start + sources.size, todo.size)
 
     def pair_distances(self, mesh: Mesh, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Geodesic distance between ``a[k]`` and ``b[k]`` for every k.

@@ -85,32 +85,6 @@ def _sym_spec(gt: list[str], sym: list[str]) -> list[str]:
     return sym
 
 
-def _progress_cache(method: str, progress):
-    """A :class:`meshcorr.evaluation.GeodesicCache` whose solves report ``progress``.
-
-    The geodesic rows are solved in blocks; on a large TARGET with a dense truth they take
-    minutes, which ran without a line on the terminal.
-    """
-    from ..evaluation import GeodesicCache
-
-    class ProgressCache(GeodesicCache):
-        def precompute(self, mesh, vertices) -> None:
-            vertices = np.unique(np.asarray(vertices, dtype=np.int64))
-            if progress is None or vertices.size <= _BLOCK:
-                return super().precompute(mesh, vertices)
-            starts = range(0, vertices.size, _BLOCK)
-            for number, start in enumerate(starts):
-                progress("geodesic errors", number, len(starts))
-                super().precompute(mesh, vertices[start:start + _BLOCK])
-            progress("geodesic errors", len(starts), len(starts))
-
-    return ProgressCache(method)
-
-
-#: Source vertices solved between two progress reports.
-_BLOCK = 256
-
-
 def _restrict_to_piece(target, mapping: np.ndarray, truths: list, quiet: bool, where: str):
     """The map and truths renumbered onto TARGET's kept piece (``target.kept``): map entries elsewhere
     become -1 (misses), truth pairs elsewhere are left out; each change is said on stderr."""
@@ -157,11 +131,11 @@ def _finite(value):
 
 def run(args) -> int:
     from ..errors import InputError
-    from ..evaluation import cumulative_curve, evaluate_map, map_quality, scalar_summary
+    from ..evaluation import GeodesicCache, cumulative_curve, evaluate_map, map_quality, scalar_summary
     from ..ground_truth import load_ground_truth
     from ..io import check_outputs, read_mesh
     from ._mapfile import read_checked_map
-    from ._progress import StageProgress
+    from .match import progress_for
     from ..mesh import Mesh, as_mesh
     from .show import check_png, one_surface, truth_inputs
 
@@ -195,10 +169,10 @@ def run(args) -> int:
         if not (mapping >= 0).any():
             raise InputError(f"{args.map} maps no SOURCE vertex onto the largest piece of {args.target}: "
                              "there is nothing to score there.")
-    progress = None if args.quiet else StageProgress(sys.stderr, delay=0.0 if args.verbose else 1.0,
-                                                     label=f"{args.map} on {args.target}")
+    # The geodesic solves take minutes on a large TARGET with a dense truth: say how far they are.
+    cache = GeodesicCache(args.geodesic, progress=progress_for(args, f"{args.map} on {args.target}"))
     report = evaluate_map(target, mapping, truth, sym_truth=sym, thresholds=thresholds,
-                          geodesic=args.geodesic, cache=_progress_cache(args.geodesic, progress))
+                          geodesic=args.geodesic, cache=cache)
     summary = scalar_summary(report)
     summary.update(map_quality(Mesh(*source, name=args.source), target, mapping))
     summary.update(source=args.source, target=args.target, map=args.map, geodesic=args.geodesic)

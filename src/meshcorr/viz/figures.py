@@ -10,7 +10,7 @@
 
 from __future__ import annotations
 
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 
 import numpy as np
 
@@ -61,41 +61,11 @@ def correspondence_errors(target, mapping: np.ndarray, truth: np.ndarray, *,
     errors = np.full(len(mapping), np.nan)
     if both.any():
         mesh = as_mesh(target, name="target")
-        if progress is not None:
-            cache = _ReportingCache(cache if cache is not None else GeodesicCache(geodesic), progress)
-        errors[both] = geodesic_errors(mesh, mapping[both], truth[both], method=geodesic, cache=cache)
+        if progress is not None:  # the solves report through the cache (a cache passed in keeps the rows)
+            cache = cache if cache is not None else GeodesicCache(geodesic)
+        with nullcontext() if progress is None else cache.reporting(progress):
+            errors[both] = geodesic_errors(mesh, mapping[both], truth[both], method=geodesic, cache=cache)
     return errors
-
-
-class _ReportingCache:
-    """A view of a :class:`GeodesicCache` whose solves report ``progress("geodesic errors", done, total)``.
-
-    ``pair_distances`` is the cache's own (it picks the rows to solve: the same rows with or without
-    progress); only its call to ``precompute`` goes through here, which solves the rows in blocks and
-    reports after each. Everything else (the rows, ``n_solves``, ``method``) is the wrapped cache's, so a
-    cache passed in keeps the rows solved here.
-    """
-
-    stage = "geodesic errors"
-
-    def __init__(self, cache: GeodesicCache, progress) -> None:
-        self._cache, self._progress = cache, progress
-
-    def __getattr__(self, name: str):
-        return getattr(self._cache, name)
-
-    pair_distances = GeodesicCache.pair_distances
-
-    def precompute(self, mesh, vertices) -> None:
-        vertices = np.unique(np.asarray(vertices, dtype=np.int64))
-        if vertices.size == 0:
-            return
-        # About 100 reports; a block of at most 256 solves (GeodesicCache's own block).
-        block = int(min(256, max(1, -(-vertices.size // 100))))
-        self._progress(self.stage, 0, vertices.size)
-        for start in range(0, vertices.size, block):
-            self._cache.precompute(mesh, vertices[start:start + block])
-            self._progress(self.stage, min(start + block, vertices.size), vertices.size)
 
 
 @contextmanager
@@ -237,15 +207,15 @@ def affinity_eigenpairs(vertices, faces, k: int, *, geodesic: str = "heat",
     progress = as_progress(progress)
     mesh = as_mesh((vertices, faces), name="mesh", min_vertices=k + 2,
                    reason=f"{k} eigenvectors need at least {k + 2} vertices.")
-    solves, reported = None, [0]
+    reported = [0]
+
+    def solves(done: int, total: int) -> None:
+        reported[0] = done
+        progress("geodesics", done, total)
+
     if progress is not None:
         progress("geodesics", 0, mesh.n_vertices)
-
-        def solves(done: int, total: int) -> None:
-            reported[0] = done
-            progress("geodesics", done, total)
-
-    D = np.array(mesh.geodesic_matrix(geodesic, progress=solves))
+    D = np.array(mesh.geodesic_matrix(geodesic, progress=None if progress is None else solves))
     if progress is not None and reported[0] < mesh.n_vertices:  # "dijkstra" solves all rows at once
         progress("geodesics", mesh.n_vertices, mesh.n_vertices)
     with _stage(progress, "eigenvectors"):

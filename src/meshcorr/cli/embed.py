@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from ..geodesics import GEODESIC_METHODS
-from .match import seed
+from .match import progress_for, seed
 from .show import add_camera_arguments, check_png
 
 HELP = "draw a mesh's affinity eigenvectors and its 3-D spectral embedding as a PNG"
@@ -72,7 +72,6 @@ def run(args) -> int:
     from ..plots import require_matplotlib
     from ..viz.figures import spectrum_figure
     from ..io import check_outputs
-    from ._progress import StageProgress
 
     check_png(args.output)
     check_outputs({"-o": args.output}, {"MESH": args.mesh})
@@ -93,8 +92,7 @@ def run(args) -> int:
         print(f"meshcorr: {args.mesh}: computing the {mesh.n_vertices} x {mesh.n_vertices} geodesic and "
               "affinity matrices and their eigenvectors...", file=sys.stderr)
     vertices, faces = mesh.vertices, mesh.faces
-    progress = None if args.quiet else StageProgress(sys.stderr, delay=0.0 if args.verbose else 1.0,
-                                                     label=args.mesh)
+    progress = progress_for(args, args.mesh)
     values = spectrum_figure(vertices, faces, args.output, n_eigenvectors=args.n_eigenvectors,
                              geodesic=args.geodesic, scale=args.scale, random_state=args.seed,
                              elev=args.elev, azim=args.azim, up=args.up, dpi=args.dpi, progress=progress)

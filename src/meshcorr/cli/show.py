@@ -123,7 +123,7 @@ def run(args) -> int:
     from ..plots import require_matplotlib
     from ..viz.figures import correspondence_figure
     from ..io import check_outputs
-    from ._progress import StageProgress
+    from .match import progress_for
 
     check_png(args.output)
     check_outputs({"-o": args.output}, {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map,
@@ -141,8 +141,7 @@ def run(args) -> int:
     mapping = read_checked_map(args.map, len(source[0]), len(target[0]))
     truth = dense_truth(args.gt, len(source[0]), len(target[0])) if args.gt else None
     # The geodesic errors against --gt take minutes on large meshes: say how far they are (as evaluate).
-    progress = None if args.quiet else StageProgress(sys.stderr, delay=0.0 if args.verbose else 1.0,
-                                                     label=f"{args.map} on {args.target}")
+    progress = progress_for(args, f"{args.map} on {args.target}")
     info = correspondence_figure(source, target, mapping, args.output, truth=truth,
                                  error=args.error, coloring=args.coloring, geodesic=args.geodesic,
                                  elev=args.elev, azim=args.azim, up=args.up, dpi=args.dpi,

@@ -552,8 +552,13 @@ def write_map(path, mapping) -> None:
     if Path(path).suffix.lower() == ".npy":
         atomic_write(path, lambda file: np.save(file, mapping, allow_pickle=False))
     else:
-        text = "".join(f"{value}\n" for value in mapping.tolist())
+        text = map_text(mapping)
         atomic_write(path, lambda file: file.write(text.encode("ascii")))
+
+
+def map_text(mapping) -> str:
+    """A vertex map as the text :func:`write_map` writes: one integer per line."""
+    return "".join(f"{value}\n" for value in np.asarray(mapping).tolist())
 
 
 def read_map(path, *, name: str | None = None) -> np.ndarray:

@@ -1,6 +1,9 @@
-"""A map file read for a command: one that does not fit the meshes is bad input data (exit 3)."""
+"""Map files of the commands: read and checked (one that does not fit the meshes is bad input data,
+exit 3), or written to stdout for ``-o -``."""
 
 from __future__ import annotations
+
+import sys
 
 import numpy as np
 
@@ -25,3 +28,11 @@ def read_checked_map(path: str, n_source: int, n_target: int) -> np.ndarray:
         return check_map(mapping, n_source, n_target, name=path)
     except ParameterError as error:
         raise InputError(str(error)) from None
+
+
+def print_map(mapping) -> None:
+    """``-o -``: the map on stdout, as the text of a map file (:func:`meshcorr.io.map_text`)."""
+    from ..io import map_text
+
+    sys.stdout.write(map_text(mapping))
+    sys.stdout.flush()

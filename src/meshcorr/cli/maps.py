@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ._mapfile import print_map
 from .match import seed
 
 TEXTURE_HELP = "carry TARGET's UV atlas and texture onto SOURCE through a precise map; write an OBJ"
@@ -190,8 +191,7 @@ def run_fmap(args) -> int:
     if args.to_map:
         mapping = _load_fmap(args.to_map, source, target)
         if args.output == "-":  # stdout, as 'meshcorr match -o -' (it wrote a file named '-')
-            sys.stdout.write("".join(f"{value}\n" for value in mapping.tolist()))
-            sys.stdout.flush()
+            print_map(mapping)
         else:
             write_map(args.output, mapping)
             _status(args, f"wrote {args.output}: the vertex map of {args.to_map}")

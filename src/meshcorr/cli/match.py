@@ -16,6 +16,7 @@ from ..geodesics import GEODESIC_METHODS
 from ..modes import MODES, N_SAMPLES, SCALABLE_ABOVE
 from ..pipeline import REFINE_K
 from ..reorder import REORDER_MODES
+from ._mapfile import print_map
 from ._progress import StageProgress
 
 HELP = "compute the vertex map from SOURCE to TARGET"
@@ -229,8 +230,7 @@ def run(args) -> int:
         if args.report:
             _write_report(args, result.map, summary)
     if args.output == "-":
-        sys.stdout.write("".join(f"{value}\n" for value in result.map.tolist()))
-        sys.stdout.flush()
+        print_map(result.map)
     if args.json:
         json.dump(summary, sys.stdout, indent=2)
         sys.stdout.write("\n")

@@ -21,6 +21,9 @@ from .errors import InputError, ParameterError
 
 __all__ = ["check_map", "pull_back", "read_attribute", "transfer_attribute", "write_values"]
 
+#: What an attribute file holds, for the messages that refuse one.
+_NUMBERS = "give one number (a scalar field) or 3-4 colour channels (0-255) per target vertex."
+
 
 def check_map(mapping, n_source: int, n_target: int, *, name: str = "map") -> np.ndarray:
     """Check that a vertex map fits a source and a target mesh.
@@ -158,12 +161,10 @@ def read_attribute(spec: str, target_path, vertices, faces) -> np.ndarray:
     except OSError as exc:  # a folder, no permission, ...
         raise InputError(f"--attribute {spec}: cannot be read ({exc.strerror or exc}).") from exc
     except (TypeError, ValueError) as exc:  # text that is not numbers, a .npy of strings or objects
-        raise InputError(f"--attribute {spec}: not a table of numbers ({exc}); give one number (a scalar "
-                         "field) or 3-4 colour channels (0-255) per target vertex.") from exc
+        raise InputError(f"--attribute {spec}: not a table of numbers ({exc}); {_NUMBERS}") from exc
     values = np.asarray(values)
     if not (np.issubdtype(values.dtype, np.number) or values.dtype == bool):  # e.g. a .npy of strings
-        raise InputError(f"--attribute {spec}: not a table of numbers (it holds {values.dtype} values); give "
-                         "one number (a scalar field) or 3-4 colour channels (0-255) per target vertex.")
+        raise InputError(f"--attribute {spec}: not a table of numbers (it holds {values.dtype} values); {_NUMBERS}")
     if values.ndim == 2 and values.shape[1] == 1:
         values = values[:, 0]
     if len(values) != n or values.ndim > 2 or (values.ndim == 2 and values.shape[1] not in (3, 4)):

@@ -37,8 +37,8 @@ import numpy as np
 import meshcorr
 from meshcorr.baselines import METHODS, SPATIAL_METHODS, run_method
 from meshcorr.baselines.rigid_icp import umeyama
-from meshcorr.evaluation import GeodesicCache, geodesic_errors
-from meshcorr.mesh import as_mesh
+from meshcorr.evaluation.metrics import GeodesicCache, geodesic_errors
+from meshcorr.core.mesh import as_mesh
 
 DEFAULT_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tosca5k"
 DEFAULT_PAIRS = "cat0-cat1,david0-david1,horse0-horse10"

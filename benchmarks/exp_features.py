@@ -33,12 +33,12 @@ from pathlib import Path
 import numpy as np
 
 import meshcorr
-from meshcorr.benchmark import check_methods, run_method
-from meshcorr.evaluation import GeodesicCache, cumulative_curve, evaluate_map
-from meshcorr.ground_truth import GroundTruth
+from meshcorr.evaluation.benchmark import check_methods, run_method
+from meshcorr.evaluation.metrics import GeodesicCache, cumulative_curve, evaluate_map
+from meshcorr.evaluation.ground_truth import GroundTruth
 from meshcorr.io import atomic_write
-from meshcorr.mesh import Mesh, as_mesh
-from meshcorr.plots import plot_cumulative_curves
+from meshcorr.core.mesh import Mesh, as_mesh
+from meshcorr.viz.plots import plot_cumulative_curves
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_DATA = HERE.parents[1] / "shared" / "data" / "sumner"

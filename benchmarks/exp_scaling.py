@@ -31,11 +31,11 @@ from pathlib import Path
 import numpy as np
 
 import meshcorr
-from meshcorr.evaluation import GeodesicCache, evaluate_map
-from meshcorr.ground_truth import GroundTruth
+from meshcorr.evaluation.metrics import GeodesicCache, evaluate_map
+from meshcorr.evaluation.ground_truth import GroundTruth
 from meshcorr.io import atomic_write
-from meshcorr.mesh import Mesh, as_mesh
-from meshcorr.plots import plot_lines
+from meshcorr.core.mesh import Mesh, as_mesh
+from meshcorr.viz.plots import plot_lines
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_MESH = HERE.parents[1] / "shared" / "data" / "meshes" / "libigl" / "cow.off"

@@ -51,7 +51,7 @@ def _candidates(result) -> str:
 
 
 def _cut(path: Path, keep: float):
-    from meshcorr.evaluation.cuts import cut_by_plane  # noqa: PLC0415 (the layout after issue 30)
+    from meshcorr.evaluation.metrics.cuts import cut_by_plane  # noqa: PLC0415 (the layout after issue 30)
     return cut_by_plane(path, keep=keep, random_state=0)[0]
 
 
@@ -61,7 +61,7 @@ def _cut_old(path: Path, keep: float):
         try:
             return _cut(path, keep)
         except ImportError:
-            from meshcorr.cuts import cut_by_plane  # noqa: PLC0415 (the layout before issue 30)
+            from meshcorr.evaluation.cuts import cut_by_plane  # noqa: PLC0415 (the layout before issue 30)
             return cut_by_plane(path, keep=keep, random_state=0)[0]
 
 

@@ -20,7 +20,7 @@ Sections:
 2. **Speed, 115k**: the Sumner cat-reference -> cat-01 pair subdivided twice
    (115 282 vertices; built by ``scale.prepare_pairs``), ``--rounds-large`` rounds.
 3. **Accuracy**: mean geodesic error (/ sqrt(area)) on 8 TOSCA pairs, one
-   per class (``meshcorr.benchmark.stratified_sample``), old vs new.
+   per class (``meshcorr.evaluation.benchmark.stratified_sample``), old vs new.
 
 Data: ``../shared/data`` beside the repository; the script exits with a
 message when it is absent.
@@ -90,7 +90,7 @@ def speed_section(title: str, runs: dict[str, list[dict]], stages: tuple = STAGE
 
 
 def accuracy_section(data: Path, old_src: Path) -> list[str]:
-    from meshcorr.benchmark import load_dataset, stratified_sample
+    from meshcorr.evaluation.benchmark import load_dataset, stratified_sample
 
     dataset = load_dataset(data / "tosca5k")
     lines = ["| pair | old error | new error | old s | new s |", "|---|---|---|---|---|"]

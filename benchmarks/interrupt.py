@@ -7,7 +7,7 @@ A crash (exit 139, "Fatal Python error") is printed with its faulthandler
 dump. Exit 130 with no output is right; so is exit 0 when the map was
 written before the signal was sent, and -2 (killed by the signal, Python's
 KeyboardInterrupt traceback) when the signal came while the child imported
-``meshcorr._threads`` for ``--threads``, before the command line runs (the
+``meshcorr.runtime.threads`` for ``--threads``, before the command line runs (the
 ``meshcorr`` console script itself catches that moment: ``meshcorr._console``,
 ``tests/test_console.py``). ``--threads N`` pretends the machine has N cores, so that the
 TPS-ICP candidates run in N worker threads.
@@ -35,7 +35,7 @@ from pathlib import Path
 
 # Run as a child: pretend to have N cores, then the CLI.
 CHILD = """
-import sys, meshcorr._threads as t
+import sys, meshcorr.runtime.threads as t
 n = int(sys.argv[1])
 if n > 0:
     t._cores = lambda: n
@@ -117,7 +117,7 @@ def main() -> int:
             written = os.path.exists(output)
             # Exit 0 is right only for a run that had written its map before the signal came
             # (the stage estimate is rough on a loaded machine); -2 is the signal's own exit
-            # while the child imports meshcorr._threads, before the CLI runs.
+            # while the child imports meshcorr.runtime.threads, before the CLI runs.
             finished_first = written and os.path.getmtime(output) <= sent
             ok = (proc.returncode in (130, -2) and not written) or (proc.returncode == 0 and finished_first)
             if proc.returncode == 0 and finished_first:

@@ -4,8 +4,8 @@ For 10 pairs of each set of ``benchmarks/robustness.py`` (spread evenly; ``--hel
 pairs of each set, spread evenly over the rest), runs ``meshcorr.match`` and records every candidate
 map of the whole-map choice twice, with its scores and its errors against the truth:
 
-- ``stage=raw``: as ZoomOut leaves it (the repaired candidates of :mod:`meshcorr.repair` included);
-- ``stage=shells``: after :func:`meshcorr.shells.shell_refine` (the library's own maps for the
+- ``stage=raw``: as ZoomOut leaves it (the repaired candidates of :mod:`meshcorr.choice.repair` included);
+- ``stage=shells``: after :func:`meshcorr.stages.shells.shell_refine` (the library's own maps for the
   candidates it refines; the others, which reverse the orientation, refined here the same way).
 
 ``--rules`` then replays choice rules on the CSV without running anything again:
@@ -22,8 +22,8 @@ Usage::
     nice -n 5 python benchmarks/judged_choice.py --out benchmarks/cache/judged.csv [--held-out] [--both-starts]
     python benchmarks/judged_choice.py --out benchmarks/cache/judged.csv --rules
 
-``--both-starts`` also turns tip assignments into maps by ``meshcorr.oriented_start``
-(``meshcorr.pipeline.EXTREMITY_STARTS``). This hooks ``meshcorr.pipeline.score_candidates`` to see
+``--both-starts`` also turns tip assignments into maps by ``meshcorr.choice.oriented_start``
+(``meshcorr.pipeline.run.EXTREMITY_STARTS``). This hooks ``meshcorr.pipeline.run.score_candidates`` to see
 the candidate maps (a study tool, not an API). Needs ``../shared/data``; exits with a message when it
 is absent.
 """
@@ -38,11 +38,11 @@ from pathlib import Path
 import numpy as np
 
 import meshcorr
-import meshcorr.pipeline as pipeline
-from meshcorr.evaluation import GeodesicCache
-from meshcorr.mesh import as_mesh
-from meshcorr.selection import ORIENTATION_MIN, REVERSED_FLOOR, MapCandidate
-from meshcorr.shells import shell_refine
+import meshcorr.pipeline.run as pipeline
+from meshcorr.evaluation.metrics import GeodesicCache
+from meshcorr.core.mesh import as_mesh
+from meshcorr.choice.selection import ORIENTATION_MIN, REVERSED_FLOOR, MapCandidate
+from meshcorr.stages.shells import shell_refine
 from robustness import DATA, _spread, build_sets, previous_rows, score
 
 FIELDS = ["set", "source", "target", "origin", "stage", "chosen", "orientation", "distortion", "curvature",

@@ -2,8 +2,8 @@
 
 :func:`partial_case` runs one case and is meant to be reused (``benchmarks/scans.py``): the
 source (or, with ``side="target"``, the target) is cut to ``keep`` of its area by a plane
-(:func:`meshcorr.cuts.cut_by_plane`) or by removing geodesic balls
-(:func:`meshcorr.cuts.remove_balls`), and matched against the other, whole shape with
+(:func:`meshcorr.evaluation.cuts.cut_by_plane`) or by removing geodesic balls
+(:func:`meshcorr.evaluation.cuts.remove_balls`), and matched against the other, whole shape with
 ``meshcorr.match(..., partial=...)``.
 
 Error protocol: the TOSCA template samples that exist on the part (``.vts`` ground truth
@@ -33,11 +33,11 @@ from pathlib import Path
 import numpy as np
 
 import meshcorr
-from meshcorr.benchmark import load_dataset, shape_class, stratified_sample
-from meshcorr.cuts import cut_by_plane, remove_balls
-from meshcorr.evaluation import GeodesicCache, geodesic_errors
-from meshcorr.ground_truth import read_vts
-from meshcorr.mesh import as_mesh
+from meshcorr.evaluation.benchmark import load_dataset, shape_class, stratified_sample
+from meshcorr.evaluation.cuts import cut_by_plane, remove_balls
+from meshcorr.evaluation.metrics import GeodesicCache, geodesic_errors
+from meshcorr.evaluation.ground_truth import read_vts
+from meshcorr.core.mesh import as_mesh
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tosca5k"
 FIELDS = ["source", "target", "class", "cut", "keep", "kept_area", "side", "mode", "mean_error",

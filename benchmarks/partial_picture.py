@@ -20,10 +20,10 @@ import warnings
 import numpy as np
 
 import meshcorr
-from meshcorr import cuts
+from meshcorr.evaluation import cuts as cuts
 from meshcorr import datasets as ds
-from meshcorr.evaluation import geodesic_errors
-from meshcorr.mesh import as_mesh
+from meshcorr.evaluation.metrics import geodesic_errors
+from meshcorr.core.mesh import as_mesh
 from meshcorr.transfer import pull_back
 from meshcorr.viz.colors import UNMAPPED_COLOR, mesh_coloring
 from meshcorr.viz.render import Panel, render_panels

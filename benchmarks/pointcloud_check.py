@@ -42,10 +42,10 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 import meshcorr
-from meshcorr.benchmark import stratified_sample
-from meshcorr.evaluation import GeodesicCache, geodesic_errors
-from meshcorr.ground_truth import read_vts
-from meshcorr.mesh import Mesh, as_mesh
+from meshcorr.evaluation.benchmark import stratified_sample
+from meshcorr.evaluation.metrics import GeodesicCache, geodesic_errors
+from meshcorr.evaluation.ground_truth import read_vts
+from meshcorr.core.mesh import Mesh, as_mesh
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tosca5k"
 VERSIONS = ("mesh", "vertices", "resampled")

@@ -1,7 +1,7 @@
 """Speed and accuracy of the ZoomOut refinement, before vs after (issue 5).
 
 Runs, side by side in one process and on the same start maps, the
-refinement of :mod:`meshcorr.refine` as it stands and as it was at a git
+refinement of :mod:`meshcorr.stages.refine` as it stands and as it was at a git
 revision (``--before``, loaded from ``git show REV:src/meshcorr/refine.py``),
 each on fresh meshes (no shared eigenbasis cache). The start map is the
 default pipeline's map with ``refine=False`` (cached in
@@ -11,7 +11,7 @@ the start map and of both refined maps, and the fraction of vertices on
 which the two refined maps agree.
 
 Pairs: ``--tosca N`` TOSCA 5k pairs (one per class first,
-:func:`meshcorr.benchmark.stratified_sample`), all ground-truth points; the
+:func:`meshcorr.evaluation.benchmark.stratified_sample`), all ground-truth points; the
 Sumner cat-reference -> cat-01 pair subdivided twice (115 282 vertices,
 truth the identity, 1000 seeded points) as ``benchmarks/scale.py`` builds it.
 
@@ -35,10 +35,10 @@ from pathlib import Path
 import numpy as np
 
 import meshcorr
-from meshcorr import refine
-from meshcorr.benchmark import load_dataset, stratified_sample
-from meshcorr.evaluation import geodesic_errors
-from meshcorr.mesh import Mesh, as_mesh
+from meshcorr.stages import refine as refine
+from meshcorr.evaluation.benchmark import load_dataset, stratified_sample
+from meshcorr.evaluation.metrics import geodesic_errors
+from meshcorr.core.mesh import Mesh, as_mesh
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_DATA = HERE.parent.parent / "shared" / "data"

@@ -48,11 +48,11 @@ from pathlib import Path
 import numpy as np
 
 import meshcorr
-from meshcorr.benchmark import stratified_sample
-from meshcorr.evaluation import GeodesicCache, geodesic_errors
-from meshcorr.ground_truth import read_vts
-from meshcorr.landmarks import farthest_point_sampling
-from meshcorr.mesh import as_mesh
+from meshcorr.evaluation.benchmark import stratified_sample
+from meshcorr.evaluation.metrics import GeodesicCache, geodesic_errors
+from meshcorr.evaluation.ground_truth import read_vts
+from meshcorr.core.sampling import farthest_point_sampling
+from meshcorr.core.mesh import as_mesh
 from tosca_symmetry import pyfm_map  # the same pyFM settings as the other benchmarks
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"

@@ -13,7 +13,7 @@ Sections of the report:
    stage's figure is the process's peak while that stage ran, imports
    included). The scalable mode (the default, ``mode="auto"``, above 2000
    vertices) at every size, ``refine=False`` as well at every size (the
-   ZoomOut refinement of :mod:`meshcorr.refine` is a separate stage), the
+   ZoomOut refinement of :mod:`meshcorr.stages.refine` is a separate stage), the
    dense mode where it runs in minutes (<= ``--dense-max`` vertices). Pairs:
    the libigl knight (502 vertices) and its midpoint subdivision (2002)
    against a rotated, scaled, re-indexed copy; TOSCA cat0/cat1 (5000) and
@@ -54,7 +54,7 @@ from pathlib import Path
 
 import numpy as np
 
-from meshcorr.modes import SCALABLE_ABOVE
+from meshcorr.spectral.modes import SCALABLE_ABOVE
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_DATA = HERE.parent.parent / "shared" / "data"
@@ -153,7 +153,7 @@ def _reset_hwm() -> None:
 
 
 def _errors(target: str, mapping: np.ndarray, job: dict) -> dict:
-    from meshcorr.evaluation import geodesic_errors
+    from meshcorr.evaluation.metrics import geodesic_errors
 
     src_pts, tgt_pts = _truth_points(job["truth"], len(mapping))
     sym_pts = np.loadtxt(job["sym"], dtype=np.int64) - 1 if job.get("sym") else None

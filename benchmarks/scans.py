@@ -10,11 +10,11 @@ is matched as:
   points as vertices, with a density that varies 4x along a random direction
   and Gaussian noise of 1 % of the bounding-box diagonal;
 - ``partial-plane``: the source cut by a random plane to 60-90 % of its area
-  (:func:`meshcorr.cuts.cut_by_plane`), against the whole target;
+  (:func:`meshcorr.evaluation.cuts.cut_by_plane`), against the whole target;
 - ``partial-balls``: the source without 3 geodesic balls, 60-90 % of its area
-  kept (:func:`meshcorr.cuts.remove_balls`), against the whole target;
+  kept (:func:`meshcorr.evaluation.cuts.remove_balls`), against the whole target;
 - ``holes``: both meshes with 5-10 holes of 0.5 % of the area each
-  (:func:`meshcorr.cuts.punch_holes`);
+  (:func:`meshcorr.evaluation.cuts.punch_holes`);
 - ``noise``: both meshes with each vertex moved along its normal by Gaussian
   noise of 0.5 % of the bounding-box diagonal (about half an edge at 5000
   vertices), the connectivity kept;
@@ -55,10 +55,10 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 import meshcorr
-from meshcorr import cuts
+from meshcorr.evaluation import cuts as cuts
 from meshcorr.errors import MeshcorrError
-from meshcorr.evaluation import GeodesicCache
-from meshcorr.mesh import Mesh, as_mesh
+from meshcorr.evaluation.metrics import GeodesicCache
+from meshcorr.core.mesh import Mesh, as_mesh
 from robustness import (DATA, Pair, _spread, appending, markdown, previous_rows, publish, score_points, summarize,
                         tosca_pairs)
 

@@ -2,7 +2,7 @@
 
 For pairs of each set of ``benchmarks/robustness.py``, runs ``meshcorr.match``
 with both ways of turning a tip assignment into a dense map
-(``meshcorr.pipeline.EXTREMITY_STARTS = ("oriented", "distances")``) and
+(``meshcorr.pipeline.run.EXTREMITY_STARTS = ("oriented", "distances")``) and
 records, per candidate map, its scores (orientation, distortion, curvature,
 regional orientation) and its errors against the truth (flips counted and
 forgiven, flipped, partly swapped), and saves the candidate maps themselves
@@ -10,7 +10,7 @@ beside the CSV (``<out>.maps/<set>__<source>__<target>.npz``, one array per
 origin), so that new energies can be studied without running the pairs again. ``--rules`` then replays choice rules on
 the dump without running anything again: which map each rule would keep,
 and its mean error per set. ``--shells`` refines the default rule's pick (and
-the best candidate) by :mod:`meshcorr.shells` and reports the errors before
+the best candidate) by :mod:`meshcorr.stages.shells` and reports the errors before
 and after, from the same starts.
 
 Usage::
@@ -19,7 +19,7 @@ Usage::
     python benchmarks/selection_study.py --out benchmarks/cache/candidates.csv --rules
     python benchmarks/selection_study.py --out benchmarks/cache/candidates.csv --shells
 
-This hooks ``meshcorr.pipeline.score_candidates`` to see the candidate maps
+This hooks ``meshcorr.pipeline.run.score_candidates`` to see the candidate maps
 (a study tool, not an API). Needs ``../shared/data``; exits with a message
 when it is absent.
 """
@@ -34,10 +34,10 @@ from pathlib import Path
 import numpy as np
 
 import meshcorr
-import meshcorr.pipeline as pipeline
-from meshcorr.evaluation import GeodesicCache
-from meshcorr.mesh import as_mesh
-from meshcorr.selection import ORIENTATION_MIN
+import meshcorr.pipeline.run as pipeline
+from meshcorr.evaluation.metrics import GeodesicCache
+from meshcorr.core.mesh import as_mesh
+from meshcorr.choice.selection import ORIENTATION_MIN
 from robustness import DATA, _spread, build_sets, score
 
 FIELDS = ["set", "source", "target", "origin", "chosen", "orientation", "distortion", "curvature",
@@ -161,10 +161,10 @@ def replay(out: Path) -> str:
 
 
 def shells(out: Path) -> str:
-    """The library rule's pick on each dumped pair, before and after :func:`meshcorr.shells.shell_refine` (Markdown)."""
+    """The library rule's pick on each dumped pair, before and after :func:`meshcorr.stages.shells.shell_refine` (Markdown)."""
     import time
 
-    from meshcorr.shells import shell_refine
+    from meshcorr.stages.shells import shell_refine
 
     with out.open() as handle:
         rows = list(csv.DictReader(handle))
@@ -176,7 +176,7 @@ def shells(out: Path) -> str:
         pairs.setdefault((r["set"], r["source"], r["target"]), []).append(r)
     known = {(p.set, p.source_name, p.target_name): p for ps in build_sets(quick=False).values() for p in ps}
 
-    def distances(r):  # the default starts (meshcorr.pipeline.EXTREMITY_STARTS)
+    def distances(r):  # the default starts (meshcorr.pipeline.run.EXTREMITY_STARTS)
         return not (r["origin"].startswith("extremities") and not r["origin"].endswith("-distances"))
 
     results: dict = {}
@@ -208,7 +208,7 @@ def main(argv=None) -> int:
     parser.add_argument("--per-set", type=int, default=20, help="pairs per set, spread evenly")
     parser.add_argument("--rules", action="store_true", help="replay the rules on the dump")
     parser.add_argument("--shells", action="store_true",
-                        help="refine the default rule's pick and the best candidate by meshcorr.shells")
+                        help="refine the default rule's pick and the best candidate by meshcorr.stages.shells")
     args = parser.parse_args(argv)
     if not DATA.is_dir():
         print(f"selection_study: {DATA} is absent; it needs ../shared/data. Skipping.", file=sys.stderr)

@@ -13,7 +13,7 @@ ordered pairs:
     ``--pyfm-pairs`` sampled pairs, in this process: seconds per map;
 (d) ``meshcorr batch --all-pairs --hub auto`` on 2 workers: the n-1 maps onto
     the spectral medoid matched, the others made from them (inverted, then
-    composed; :mod:`meshcorr.consistency`): wall seconds per map and the
+    composed; :mod:`meshcorr.collection.consistency`): wall seconds per map and the
     maps' error;
 (e) ``meshcorr batch --all-pairs --no-shells`` on 2 workers: every pair
     matched without the smooth-shell stage (the option that trades accuracy
@@ -21,7 +21,7 @@ ordered pairs:
 
 Also: seconds to prepare one shape and to match one prepared pair, with and
 without the smooth shells (medians, in this process), the mean geodesic error against TOSCA's ground truth of
-(b)'s maps, of the maps composed through the hub (:mod:`meshcorr.consistency`)
+(b)'s maps, of the maps composed through the hub (:mod:`meshcorr.collection.consistency`)
 and of pyFM's (on ``--gt-points`` sampled truth points per pair), and the
 cycle-consistency error of both sets of maps.
 
@@ -73,8 +73,8 @@ def _batch_cli(shapes: list[Path], out: Path, workers: int, *extra: str) -> floa
 
 def _truth_errors(maps: dict, shapes: dict, data: Path, n_points: int, seed: int) -> dict:
     """Mean geodesic error / sqrt(target area) of each map on a seeded sample of truth points."""
-    from meshcorr.evaluation import GeodesicCache
-    from meshcorr.ground_truth import read_vts
+    from meshcorr.evaluation.metrics import GeodesicCache
+    from meshcorr.evaluation.ground_truth import read_vts
 
     vts = {name: read_vts(data / "corres" / f"{name}.vts") - 1 for name in shapes}
     n_truth = min(len(v) for v in vts.values())
@@ -106,8 +106,8 @@ def main() -> int:
         return 0
 
     import meshcorr
-    from meshcorr.collection import all_pairs, map_name
-    from meshcorr.consistency import choose_hub, cycle_errors, sample_triples, through_hub
+    from meshcorr.collection.batch import all_pairs, map_name
+    from meshcorr.collection.consistency import choose_hub, cycle_errors, sample_triples, through_hub
     from meshcorr.io import read_map
 
     paths = _shapes(args.data, args.name, args.shapes)

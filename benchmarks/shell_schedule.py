@@ -5,7 +5,7 @@ For 10 pairs of each chosen set of ``benchmarks/robustness.py`` (spread evenly),
 (flips counted and forgiven), full flips and partial swaps per set and variant:
 
 - ``adopted``: the library as it is: every candidate that keeps the orientation aligned on
-  :data:`meshcorr.shells.SCALES` (6, 8, ..., 40), the user's landmark distances in the landmark
+  :data:`meshcorr.stages.shells.SCALES` (6, 8, ..., 40), the user's landmark distances in the landmark
   candidate's product space;
 - ``no-descriptors``: adopted without the landmark distances (differs only with landmarks);
 - ``coarse``: the candidates on the former coarse schedule (8, 12, 16, 24, 32, 40).
@@ -32,11 +32,11 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 
 import meshcorr
-import meshcorr.pipeline as pipeline
-import meshcorr.selection as selection
-import meshcorr.shells as shells
-from meshcorr.evaluation import GeodesicCache
-from meshcorr.mesh import as_mesh
+import meshcorr.pipeline.run as pipeline
+import meshcorr.choice.selection as selection
+import meshcorr.stages.shells as shells
+from meshcorr.evaluation.metrics import GeodesicCache
+from meshcorr.core.mesh import as_mesh
 from robustness import DATA, _spread, build_sets, score, truth_landmarks
 
 VARIANTS = ("adopted", "no-descriptors", "coarse")

@@ -7,13 +7,13 @@ One command reproduces ``docs/texture_transfer.png`` and ``benchmarks/RESULTS-te
 The target gets a UV atlas by projecting it on its two principal axes
 (seamless) and a checkerboard texture; ``meshcorr.match`` maps the source
 onto it, ``result.precise_map()`` puts each source vertex on a target
-triangle and :func:`meshcorr.texture.transfer_uv` gives it the UV there. The
+triangle and :func:`meshcorr.maps.texture.transfer_uv` gives it the UV there. The
 picture shows the target, the source through the precise map and the source
 through the plain vertex map, coloured by the texture at each vertex's UV.
 The report measures continuity as the share of source edges whose two UVs
 lie further apart than any target edge's 99th percentile ("texture tears"),
 and the maps' coverage, bijectivity and continuity
-(:func:`meshcorr.evaluation.map_quality`). Data: ``../shared/data`` beside
+(:func:`meshcorr.evaluation.metrics.map_quality`). Data: ``../shared/data`` beside
 the repository; the script exits with a message when it is absent.
 """
 
@@ -102,10 +102,10 @@ def main(argv=None) -> int:
         return 0
 
     import meshcorr
-    from meshcorr.evaluation import evaluate_map, map_quality
-    from meshcorr.ground_truth import load_ground_truth
-    from meshcorr.mesh import as_mesh
-    from meshcorr.texture import TexturedMesh, transfer_uv
+    from meshcorr.evaluation.metrics import evaluate_map, map_quality
+    from meshcorr.evaluation.ground_truth import load_ground_truth
+    from meshcorr.core.mesh import as_mesh
+    from meshcorr.maps.texture import TexturedMesh, transfer_uv
     from meshcorr.viz.render import render_panels
 
     source = as_mesh(folder / f"{args.source}.off")

@@ -27,10 +27,10 @@ from pathlib import Path
 import numpy as np
 
 import meshcorr
-from meshcorr.benchmark import shape_class
-from meshcorr.evaluation import geodesic_errors
-from meshcorr.ground_truth import read_vts
-from meshcorr.mesh import as_mesh
+from meshcorr.evaluation.benchmark import shape_class
+from meshcorr.evaluation.metrics import geodesic_errors
+from meshcorr.evaluation.ground_truth import read_vts
+from meshcorr.core.mesh import as_mesh
 
 DEFAULT_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tosca5k"
 STAGES = ("geodesics", "embedding", "reorder", "symmetry", "icp", "matching", "refine")

@@ -1,7 +1,7 @@
 """Left/right flips and refinement on TOSCA-5k (issue 6), against pyFM on the same pairs.
 
 For a deterministic class-stratified sample of ``test_pairs.txt``
-(:func:`meshcorr.benchmark.stratified_sample`: classes in turn, so 40 pairs
+(:func:`meshcorr.evaluation.benchmark.stratified_sample`: classes in turn, so 40 pairs
 cover all 8 classes), runs
 
 - ``default``: ``meshcorr.match`` with default settings (``symmetry="auto"``,
@@ -42,12 +42,12 @@ from pathlib import Path
 import numpy as np
 
 import meshcorr
-from meshcorr.benchmark import load_dataset, shape_class, stratified_sample
-from meshcorr.evaluation import GeodesicCache, evaluate_map
-from meshcorr.ground_truth import load_ground_truth
-from meshcorr.mesh import as_mesh
-from meshcorr.pipeline import REFINE_K
-from meshcorr.refine import refine_map
+from meshcorr.evaluation.benchmark import load_dataset, shape_class, stratified_sample
+from meshcorr.evaluation.metrics import GeodesicCache, evaluate_map
+from meshcorr.evaluation.ground_truth import load_ground_truth
+from meshcorr.core.mesh import as_mesh
+from meshcorr.pipeline.run import REFINE_K
+from meshcorr.stages.refine import refine_map
 
 DEFAULT_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "tosca5k"
 METHODS = ("default", "cost", "no-refine", "pyfm")

@@ -32,7 +32,7 @@ from meshcorr import datasets as ds
 from meshcorr.cli import main
 from meshcorr.errors import MeshcorrError
 from meshcorr.io import read_map, read_mesh
-from meshcorr.mesh import as_mesh
+from meshcorr.core.mesh import as_mesh
 
 HOSTILE_NUMBERS = [b"nan", b"inf", b"-inf", b"1e309", b"-1", b"0", b"3.5", b"99999999999999999999", b"0x10",
                    b"", b"-0", b"1e-320", b"+7", b"\xff", b"4294967297", b"-9223372036854775809"]

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-import meshcorr.anchors as anchors_module
-from meshcorr.anchors import anchor_descriptors, proximity_matching, select_anchors
+import meshcorr.stages.anchors as anchors_module
+from meshcorr.stages.anchors import anchor_descriptors, proximity_matching, select_anchors
 from meshcorr.errors import ParameterError
 
 

@@ -182,11 +182,11 @@ def test_baseline_results_keep_their_meshes_too(shape, copy_and_truth):
 
 
 def test_pipeline_and_baselines_no_longer_import_each_other():
-    code = ("import sys, meshcorr.pipeline; "
+    code = ("import sys, meshcorr.pipeline.run; "
             "assert 'meshcorr.baselines' not in sys.modules, 'pipeline imported the baselines'")
     subprocess.run([sys.executable, "-c", code], check=True)
     import meshcorr.baselines as baselines
-    from meshcorr import methods
+    from meshcorr.pipeline import methods as methods
 
     assert baselines.run_method is methods.run_method and baselines.METHODS == methods.METHOD_NAMES
 
@@ -283,8 +283,8 @@ def test_the_summary_is_json_with_a_numpy_seed(shape):
 
 
 def test_wrong_values_for_the_result_s_methods_are_refused_by_name(shape):
-    from meshcorr import evaluation
-    from meshcorr.ground_truth import GroundTruth
+    from meshcorr.evaluation import metrics as evaluation
+    from meshcorr.evaluation.ground_truth import GroundTruth
 
     result = meshcorr.match(shape, shape, refine=False)
     n = shape.n_vertices
@@ -327,7 +327,7 @@ def test_a_functional_map_and_a_matcher_refuse_wrong_inputs_by_name(shape):
 
 def test_a_mesh_made_directly_is_checked():
     from meshcorr.errors import MeshError
-    from meshcorr.mesh import Mesh
+    from meshcorr.core.mesh import Mesh
 
     shape = ds.creature(resolution=1)
     V, F = np.asarray(shape.vertices), np.asarray(shape.faces)

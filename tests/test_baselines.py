@@ -16,7 +16,7 @@ from meshcorr.baselines.shape_context import chi_square_cost, match_histograms
 from meshcorr.baselines.tps_rpm import tps_rpm
 from meshcorr.cli import main
 from meshcorr.errors import ParameterError
-from meshcorr.evaluation import geodesic_errors
+from meshcorr.evaluation.metrics import geodesic_errors
 
 # tps-rpm with a faster schedule where only invariances are checked
 FAST_RPM = dict(anneal_rate=0.8, inner_iterations=2)

@@ -12,11 +12,11 @@ import pytest
 import trimesh
 
 import meshcorr
-from meshcorr import cuts
+from meshcorr.evaluation import cuts as cuts
 from meshcorr import datasets as ds
-from meshcorr.collection import all_pairs, batch, map_name, read_pairs, template_pairs
+from meshcorr.collection.batch import all_pairs, batch, map_name, read_pairs, template_pairs
 from meshcorr.cli import main
-from meshcorr.consistency import (choose_hub, cycle_errors, invert, sample_triples, shape_dna, spectral_medoid,
+from meshcorr.collection.consistency import (choose_hub, cycle_errors, invert, sample_triples, shape_dna, spectral_medoid,
                                   through_hub)
 from meshcorr.errors import ParameterError
 from meshcorr.io import read_map
@@ -159,7 +159,7 @@ def test_a_hub_pair_that_fails_fails_the_maps_composed_through_it(cluster, shape
 
 
 def test_the_time_left_counts_matches_at_their_pace_and_compositions_at_theirs(monkeypatch):
-    from meshcorr import collection
+    from meshcorr.collection import batch as collection
 
     clock = iter([0.0, 5.0, 10.0, 10.0, 15.0, 20.0, 20.0, 21.0])
     monkeypatch.setattr(collection.time, "perf_counter", lambda: next(clock))
@@ -189,7 +189,7 @@ def test_hub_error_paths(shapes, tmp_path, capsys):
         batch(all_pairs(paths[:3]), tmp_path, hub="auto", partial="source")
     with pytest.raises(ParameterError, match="at least one shape"):
         spectral_medoid({})
-    from meshcorr.consistency import _positive
+    from meshcorr.collection.consistency import _positive
 
     for values in ([0.0], [0.0, -1.0], [0.0, np.nan]):
         with pytest.raises(ParameterError, match="Shape-DNA needs"):
@@ -328,7 +328,7 @@ def test_batch_checks_its_input_before_any_work(shapes, tmp_path):
 
 def test_cli_usage_errors(shapes, tmp_path, capsys, monkeypatch):
     paths, _ = shapes
-    monkeypatch.setattr("meshcorr.collection.CONNECT_TIMEOUT", 1)
+    monkeypatch.setattr("meshcorr.collection.batch.CONNECT_TIMEOUT", 1)
     assert main(["batch", "--all-pairs", *paths[:2], "--out", str(tmp_path), "--set", "nokey"]) == 2
     assert "--set takes KEY=VALUE" in capsys.readouterr().err
     assert main(["batch", "--pairs", "p.txt", paths[0], "--out", str(tmp_path)]) == 2
@@ -380,7 +380,7 @@ def test_without_dask_the_batch_names_the_extra(shapes, tmp_path, monkeypatch, c
 
 
 def test_meshcorr_threads_1_runs_the_thread_pools_in_the_calling_thread(monkeypatch):
-    from meshcorr._threads import parallel_map
+    from meshcorr.runtime.threads import parallel_map
 
     monkeypatch.setenv("MESHCORR_THREADS", "1")  # what each worker process of the local cluster gets
     assert parallel_map(lambda _: threading.get_ident(), [0, 1, 2]) == [threading.get_ident()] * 3
@@ -400,7 +400,7 @@ def test_an_inverse_map_sends_each_vertex_to_the_source_of_its_nearest_image():
 
 def test_composed_maps_keep_unmapped_vertices_unmapped(shapes):
     # -1 (a vertex dropped by largest_component, or outside a part) must not index B's last vertex.
-    from meshcorr.consistency import compose
+    from meshcorr.collection.consistency import compose
 
     np.testing.assert_array_equal(compose(np.array([2, -1, 0]), np.array([5, -1, 7])), [7, -1, 5])
     np.testing.assert_array_equal(compose(np.array([-1, -1]), np.array([], dtype=int)), [-1, -1])
@@ -424,7 +424,7 @@ def test_consistency_error_paths(shapes, tmp_path):
         choose_hub(one_way, meshes)
     with pytest.raises(ParameterError, match="'n_points' parameter must be an int >= 1"):
         cycle_errors(one_way, meshes, [("a", "b", "c")], n_points=0)
-    from meshcorr.consistency import consistency_report
+    from meshcorr.collection.consistency import consistency_report
 
     records = [{"source": paths[0], "target": paths[1], "status": "failed", "map": ""}]
     with pytest.raises(ParameterError, match="needs three shapes whose maps all succeeded"):
@@ -446,8 +446,8 @@ def test_consistency_error_paths(shapes, tmp_path):
 
 
 def test_a_damaged_summary_and_a_partial_target_are_reported(shapes, tmp_path):
-    from meshcorr.collection import _mean_error
-    from meshcorr.prepared import prepare
+    from meshcorr.collection.batch import _mean_error
+    from meshcorr.shapes.prepared import prepare
 
     paths, _ = shapes
     (tmp_path / "summary.json").write_text("{")
@@ -472,7 +472,7 @@ def test_cli_batch_cache_and_ctrl_c(cluster, shapes, tmp_path, monkeypatch, caps
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("meshcorr.collection.batch", interrupted)
+    monkeypatch.setattr("meshcorr.collection.batch.batch", interrupted)
     assert main(["batch", "--template", paths[0], paths[1], "--out", str(tmp_path / "o2"), "-q"]) == 130
     assert "interrupted" in capsys.readouterr().err
 

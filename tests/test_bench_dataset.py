@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 import trimesh
 
-import meshcorr.benchmark as benchmark
+import meshcorr.evaluation.benchmark as benchmark
 from meshcorr import datasets as ds
 from meshcorr.cli import EXIT_USAGE, main
-from meshcorr.result import Correspondence
+from meshcorr.maps.result import Correspondence
 
 SHAPE = ds.tube(n_along=10, n_around=6)
 

@@ -1,4 +1,4 @@
-"""One-to-one maps: :func:`meshcorr.bijection.nearest_bijection` and ``bijective=True`` end to end."""
+"""One-to-one maps: :func:`meshcorr.stages.bijection.nearest_bijection` and ``bijective=True`` end to end."""
 
 import itertools
 
@@ -8,7 +8,7 @@ import trimesh
 
 import meshcorr
 from meshcorr import datasets
-from meshcorr.bijection import nearest_bijection
+from meshcorr.stages.bijection import nearest_bijection
 from meshcorr.cli import main
 from meshcorr.errors import ParameterError
 

@@ -9,10 +9,10 @@ import pytest
 
 import meshcorr
 from meshcorr import datasets as ds
-from meshcorr.cache import ShapeCache, as_cache, default_cache_dir
+from meshcorr.shapes.cache import ShapeCache, as_cache, default_cache_dir
 from meshcorr.cli import main
 from meshcorr.errors import ParameterError, PreparedShapeError
-from meshcorr.prepared import SHAPE_SETTINGS, PreparedShape, load_mesh, prepare
+from meshcorr.shapes.prepared import SHAPE_SETTINGS, PreparedShape, load_mesh, prepare
 
 
 @pytest.fixture(scope="module")

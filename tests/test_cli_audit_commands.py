@@ -155,14 +155,14 @@ def test_evaluate_reports_progress_of_the_geodesic_solves(files, capsys):
 
 def test_evaluate_interrupted_leaves_no_curve(files, tmp_path, capsys, monkeypatch):
     pytest.importorskip("matplotlib")
-    import meshcorr.evaluation
+    import meshcorr.evaluation.metrics
 
     _, p, _ = files
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(meshcorr.evaluation, "map_quality", interrupted)
+    monkeypatch.setattr(meshcorr.evaluation.metrics, "map_quality", interrupted)
     curve = tmp_path / "curve.png"
     code, _, err = _run(["evaluate", p["src"], p["tgt"], p["map"], "--gt", p["map"], "--curve", str(curve)],
                         capsys)
@@ -306,12 +306,12 @@ def dataset(tmp_path):
 
 
 def test_bench_refuses_bad_method_options_before_any_run(dataset, tmp_path, capsys, monkeypatch):
-    import meshcorr.benchmark
+    import meshcorr.evaluation.benchmark
 
     def no_run(*args, **kwargs):
         raise AssertionError("a method ran")
 
-    monkeypatch.setattr(meshcorr.benchmark, "run_method", no_run)
+    monkeypatch.setattr(meshcorr.evaluation.benchmark, "run_method", no_run)
     out = tmp_path / "out"
     base = ["bench", str(dataset), "--out", str(out), "--no-plot", "-q"]
     for option, message in ((["--set", "spectral:method=icp"], "use --methods"),  # ran icp, named spectral

@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 import trimesh
 
-import meshcorr.benchmark as benchmark
+import meshcorr.evaluation.benchmark as benchmark
 from meshcorr import datasets as ds
 from meshcorr.cli import main
 from meshcorr.errors import ParameterError
-from meshcorr.result import Correspondence
+from meshcorr.maps.result import Correspondence
 
 
 def save_off(path, shape):

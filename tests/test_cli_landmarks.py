@@ -8,7 +8,7 @@ import trimesh
 
 from meshcorr import datasets
 from meshcorr.cli import main
-from meshcorr.landmark_map import read_landmarks
+from meshcorr.stages.landmarks import read_landmarks
 from meshcorr.errors import InputError
 
 

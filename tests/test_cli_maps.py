@@ -9,7 +9,7 @@ from PIL import Image
 
 from meshcorr import datasets as ds
 from meshcorr.cli import main
-from meshcorr.texture import read_textured_obj
+from meshcorr.maps.texture import read_textured_obj
 
 
 @pytest.fixture(scope="module")

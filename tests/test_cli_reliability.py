@@ -48,7 +48,7 @@ def test_two_outputs_on_one_path_are_refused(pair, tmp_path, capsys):
 
 def test_unwritable_outputs_are_found_before_the_work(pair, tmp_path, capsys, monkeypatch):
     src, tgt, _ = pair
-    import meshcorr.pipeline
+    import meshcorr.pipeline.run
 
     def no_work(*args, **kwargs):  # the checks must come first
         raise AssertionError("match ran")
@@ -56,7 +56,7 @@ def test_unwritable_outputs_are_found_before_the_work(pair, tmp_path, capsys, mo
     # meshcorr.match first: the package loads its public names on first use (meshcorr.__getattr__),
     # and would otherwise record the patched pipeline.match as the value to restore.
     monkeypatch.setattr(meshcorr, "match", no_work)
-    monkeypatch.setattr(meshcorr.pipeline, "match", no_work)
+    monkeypatch.setattr(meshcorr.pipeline.run, "match", no_work)
     for out, message in [("/proc/meshcorr-map.txt", "no file can be created in /proc"),
                          (str(tmp_path / "missing" / "m.txt"), "does not exist"),
                          (str(tmp_path), "it is a folder"),

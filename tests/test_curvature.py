@@ -6,9 +6,9 @@ import pytest
 from scipy.spatial import cKDTree
 
 from meshcorr import datasets as ds
-from meshcorr.curvature import curvature_disagreement, signed_mean_curvature, smoothed_curvature
+from meshcorr.choice.curvature import curvature_disagreement, signed_mean_curvature, smoothed_curvature
 from meshcorr.errors import ParameterError
-from meshcorr.mesh import Mesh
+from meshcorr.core.mesh import Mesh
 
 
 def nosed_sphere():
@@ -83,9 +83,9 @@ def test_bad_maps_are_refused():
 
 def test_a_boundary_does_not_bend_the_curvature_next_to_it():
     # A sphere with its top cut off: the one-sided Laplacian on the rim is not a curvature.
-    from meshcorr import cuts
-    from meshcorr.curvature import _on_boundary
-    from meshcorr.mesh import as_mesh
+    from meshcorr.evaluation import cuts as cuts
+    from meshcorr.choice.curvature import _on_boundary
+    from meshcorr.core.mesh import as_mesh
 
     ball = as_mesh(ds.sphere(subdivisions=4))
     part, _ = cuts.cut_by_plane(ball, keep=0.8, normal=[0, 0, 1])
@@ -96,8 +96,8 @@ def test_a_boundary_does_not_bend_the_curvature_next_to_it():
 
 
 def test_mapped_curvature_is_smoothed_curvature_bit_for_bit_from_a_cached_table(monkeypatch):
-    from meshcorr import curvature
-    from meshcorr.curvature import mapped_curvature, smoothed_curvature
+    from meshcorr.choice import curvature as curvature
+    from meshcorr.choice.curvature import mapped_curvature, smoothed_curvature
 
     shape = ds.creature(resolution=1)
     mesh = Mesh(shape.vertices, shape.faces)

@@ -1,13 +1,15 @@
-"""Partial shapes and holes (meshcorr.cuts): kept area, index maps, boundaries, refusals."""
+"""Partial shapes and holes (meshcorr.evaluation.cuts): kept area, index maps, boundaries, refusals."""
 
 import numpy as np
 import pytest
 import trimesh
 
-from meshcorr import cuts, datasets
+from meshcorr import datasets
+
+from meshcorr.evaluation import cuts as cuts
 from meshcorr.errors import ParameterError
-from meshcorr.mesh import as_mesh
-from meshcorr.validate import pinched_vertices
+from meshcorr.core.mesh import as_mesh
+from meshcorr.core.validate import pinched_vertices
 
 
 @pytest.fixture(scope="module")

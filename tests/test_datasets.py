@@ -502,10 +502,10 @@ def test_creature_ground_truth_tip_to_tip():
 
 @pytest.mark.parametrize("pose", ["rest", "curled"])
 def test_creature_spectrum_is_well_separated(pose):
-    # the geodesic Gaussian affinity (sigma = largest geodesic) of meshcorr.embedding has
+    # the geodesic Gaussian affinity (sigma = largest geodesic) of meshcorr.spectral.embedding has
     # distinct top eigenvalues, unlike the tube-like figure(): its eigenvectors do not mix
-    from meshcorr.embedding import gaussian_affinity, top_eigenpairs
-    from meshcorr.mesh import as_mesh
+    from meshcorr.spectral.embedding import gaussian_affinity, top_eigenpairs
+    from meshcorr.core.mesh import as_mesh
 
     shape = creature(resolution=1, pose=pose)
     distances = as_mesh((shape.vertices, shape.faces)).geodesic_matrix("heat")

@@ -4,9 +4,9 @@ import numpy as np
 import pytest
 
 from meshcorr.datasets import tube
-from meshcorr.embedding import gaussian_affinity, sign_convention, spectral_embedding, top_eigenpairs
+from meshcorr.spectral.embedding import gaussian_affinity, sign_convention, spectral_embedding, top_eigenpairs
 from meshcorr.errors import ParameterError
-from meshcorr.geodesics import pairwise_geodesics
+from meshcorr.core.geodesics import pairwise_geodesics
 
 
 @pytest.fixture(scope="module")

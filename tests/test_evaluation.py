@@ -6,10 +6,10 @@ from scipy.spatial import cKDTree
 
 from meshcorr import datasets as ds
 from meshcorr.errors import ParameterError
-from meshcorr.evaluation import (GeodesicCache, _greedy_cover, cumulative_curve, evaluate_map,
+from meshcorr.evaluation.metrics import (GeodesicCache, _greedy_cover, cumulative_curve, evaluate_map,
                                  feature_point_accuracy, geodesic_errors, scalar_summary)
-from meshcorr.ground_truth import GroundTruth, identity_truth, load_ground_truth, read_pairs, read_vts
-from meshcorr.mesh import Mesh
+from meshcorr.evaluation.ground_truth import GroundTruth, identity_truth, load_ground_truth, read_pairs, read_vts
+from meshcorr.core.mesh import Mesh
 
 RADIUS = 2.0
 

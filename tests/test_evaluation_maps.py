@@ -8,8 +8,8 @@ import pytest
 
 from meshcorr import datasets as ds
 from meshcorr.errors import ParameterError
-from meshcorr.evaluation import _greedy_cover, evaluate_map
-from meshcorr.ground_truth import identity_truth
+from meshcorr.evaluation.metrics import _greedy_cover, evaluate_map
+from meshcorr.evaluation.ground_truth import identity_truth
 
 
 @pytest.fixture(scope="module")

@@ -5,7 +5,7 @@ import pytest
 import trimesh
 
 from meshcorr.errors import ParameterError
-from meshcorr.geodesics import geodesic_solver, pairwise_geodesics
+from meshcorr.core.geodesics import geodesic_solver, pairwise_geodesics
 
 
 @pytest.fixture(scope="module")

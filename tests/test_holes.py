@@ -1,20 +1,20 @@
-"""Holes closed before matching (meshcorr.holes): the filled mesh, the map back on the input, the options."""
+"""Holes closed before matching (meshcorr.core.holes): the filled mesh, the map back on the input, the options."""
 
 import numpy as np
 import pytest
 import trimesh
 
 import meshcorr
-from meshcorr import cuts
+from meshcorr.evaluation import cuts as cuts
 from meshcorr import datasets as ds
-from meshcorr.boundary import mesh_boundary
+from meshcorr.core.boundary import mesh_boundary
 from meshcorr.cli import main
 from meshcorr.errors import ParameterError
-from meshcorr.evaluation import geodesic_errors
-from meshcorr.holes import cap_targets, fill_holes, restrict_map, unfilled
-from meshcorr.mesh import Mesh, as_mesh
-from meshcorr.prepared import PreparedShape
-from meshcorr.validate import validate_mesh
+from meshcorr.evaluation.metrics import geodesic_errors
+from meshcorr.core.holes import cap_targets, fill_holes, restrict_map, unfilled
+from meshcorr.core.mesh import Mesh, as_mesh
+from meshcorr.shapes.prepared import PreparedShape
+from meshcorr.core.validate import validate_mesh
 
 
 @pytest.fixture(scope="module")

@@ -5,8 +5,8 @@ import pytest
 from scipy.spatial import cKDTree
 
 from meshcorr.errors import ParameterError
-from meshcorr.icp import tps_icp
-from meshcorr.tps import fit_tps, mean_pairwise_distance
+from meshcorr.stages.icp import tps_icp
+from meshcorr.stages.tps import fit_tps, mean_pairwise_distance
 
 
 def test_tps_interpolates_without_smoothing():

@@ -28,7 +28,7 @@ STAGES = ["load", "geodesics", "embedding", "reorder", "symmetry", "icp", "match
 CHILD = textwrap.dedent("""
     import json, os, signal, sys, threading
     signal.signal(signal.SIGINT, signal.default_int_handler)  # even if pytest runs with SIGINT ignored
-    import meshcorr._threads as t
+    import meshcorr.runtime.threads as t
     import meshcorr.cli.match as cli_match
     from meshcorr.cli import main
 
@@ -111,7 +111,7 @@ QUERY = textwrap.dedent("""
     import signal, sys, threading
     import numpy as np
     from scipy.spatial import cKDTree
-    import meshcorr._threads as t
+    import meshcorr.runtime.threads as t
 
     t._cores = lambda: 4
     points = np.random.default_rng(0).random((400_000, 3))

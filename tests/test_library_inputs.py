@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from meshcorr.errors import InputError, MeshError
-from meshcorr.ground_truth import load_ground_truth, read_pairs
+from meshcorr.evaluation.ground_truth import load_ground_truth, read_pairs
 from meshcorr.io import read_map, read_mesh, read_npz
 
 
@@ -99,7 +99,7 @@ def test_precise_map_refuses_a_basis_larger_than_the_mesh():
     from meshcorr.datasets import tube
     from meshcorr.errors import ParameterError
     from meshcorr.fmap import functional_map
-    from meshcorr.mesh import Mesh
+    from meshcorr.core.mesh import Mesh
     from meshcorr.precise import precise_map
 
     shape = tube(n_along=6, n_around=5)  # 32 vertices
@@ -117,7 +117,7 @@ def test_precise_map_refuses_a_basis_larger_than_the_mesh():
 # ---------------------------------------------------------------- cache listings
 
 def test_cache_lists_and_clears_regular_files_only(tmp_path):
-    from meshcorr.cache import ShapeCache
+    from meshcorr.shapes.cache import ShapeCache
 
     root = tmp_path / "cache"
     (root / ("a" * 64 + ".npz")).mkdir(parents=True)  # a folder named like a key: was one prepared shape

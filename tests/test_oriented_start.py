@@ -1,13 +1,13 @@
-"""Orientation-preserving functional-map start (meshcorr.oriented_start): operator signs, front/back."""
+"""Orientation-preserving functional-map start (meshcorr.choice.oriented_start): operator signs, front/back."""
 
 import numpy as np
 import pytest
 
-from meshcorr.landmark_map import landmark_map
-from meshcorr.mesh import Mesh
-from meshcorr.orientation import orientation_score
-from meshcorr.oriented_start import descriptors, fit_oriented_map, orientation_operators
-from meshcorr.refine import laplace_basis
+from meshcorr.stages.landmarks import landmark_map
+from meshcorr.core.mesh import Mesh
+from meshcorr.choice.orientation import orientation_score
+from meshcorr.choice.oriented_start import descriptors, fit_oriented_map, orientation_operators
+from meshcorr.stages.refine import laplace_basis
 from test_selection import _geodesics, _person, _tip_vertex
 
 PLANAR_TIPS = ("head", "arm_l", "arm_r", "leg_l", "leg_r")  # all in the plane y = 0: front and back look alike

@@ -1,4 +1,4 @@
-"""Partial shapes (meshcorr.partial): a part against the whole, the matched region, warnings and refusals."""
+"""Partial shapes (meshcorr.pipeline.partial): a part against the whole, the matched region, warnings and refusals."""
 
 import json
 import warnings
@@ -8,16 +8,16 @@ import pytest
 import trimesh
 
 import meshcorr
-from meshcorr import cuts
+from meshcorr.evaluation import cuts as cuts
 from meshcorr import datasets as ds
-from meshcorr.boundary import boundary_distance, mesh_boundary
+from meshcorr.core.boundary import boundary_distance, mesh_boundary
 from meshcorr.cli import main
 from meshcorr.errors import PartialityError, PartialShapeWarning, PreparedShapeError
-from meshcorr.evaluation import geodesic_errors
-from meshcorr.landmarks import farthest_point_sampling
-from meshcorr.mesh import as_mesh
-from meshcorr.orientation import orient_outward
-from meshcorr.partial import (check_part_not_larger, geodesic_rows, match_part, matched_region,
+from meshcorr.evaluation.metrics import geodesic_errors
+from meshcorr.core.sampling import farthest_point_sampling
+from meshcorr.core.mesh import as_mesh
+from meshcorr.choice.orientation import orient_outward
+from meshcorr.pipeline.partial import (check_part_not_larger, geodesic_rows, match_part, matched_region,
                               partiality_suspicion)
 
 #: Mean geodesic error / sqrt(target area) a partial map must stay under (measured: 0.016-0.03).

@@ -133,7 +133,7 @@ def creature_rest():
 @pytest.mark.parametrize("pose, resolution", [("bent", 1), ("curled", 1), ("bent", 2)])
 def test_bent_pose_maps_back_with_small_geodesic_error(creature_rest, pose, resolution):
     """An isometric bend, also at another resolution (different vertex count)."""
-    from meshcorr.evaluation import geodesic_errors
+    from meshcorr.evaluation.metrics import geodesic_errors
 
     target = ds.creature(resolution=resolution, pose=pose, random_state=1)
     truth = ds.ground_truth(creature_rest, target)

@@ -10,15 +10,15 @@ import trimesh
 
 import meshcorr
 from meshcorr import datasets as ds
-from meshcorr.curvature import signed_mean_curvature
+from meshcorr.choice.curvature import signed_mean_curvature
 from meshcorr.errors import MeshError, MeshWarning, ParameterError
-from meshcorr.evaluation import geodesic_errors, map_quality
-from meshcorr.geodesics import geodesic_solver
-from meshcorr.laplacian import vertex_areas
-from meshcorr.mesh import Mesh, as_mesh
-from meshcorr.orientation import mesh_orientation, oriented_normals
-from meshcorr.pointcloud import MIN_POINTS, edges, validate_cloud
-from meshcorr.prepared import FORMAT_VERSION, PreparedShape
+from meshcorr.evaluation.metrics import geodesic_errors, map_quality
+from meshcorr.core.geodesics import geodesic_solver
+from meshcorr.core.laplacian import vertex_areas
+from meshcorr.core.mesh import Mesh, as_mesh
+from meshcorr.choice.orientation import mesh_orientation, oriented_normals
+from meshcorr.core.pointcloud import MIN_POINTS, edges, validate_cloud
+from meshcorr.shapes.prepared import FORMAT_VERSION, PreparedShape
 
 NO_FACES = np.zeros((0, 3), dtype=np.int64)
 
@@ -327,7 +327,7 @@ def test_the_spectral_minimum_applies_to_clouds_too():
 
 def test_a_mesh_and_a_cloud_of_the_same_points_are_different_shapes(creature):
     """The prepared-shape digest tells a mesh from the cloud of its vertices."""
-    from meshcorr.prepared import mesh_digest
+    from meshcorr.shapes.prepared import mesh_digest
 
     assert mesh_digest(Mesh(creature.vertices, creature.faces)) != mesh_digest(Mesh(creature.vertices, NO_FACES))
 

@@ -5,9 +5,9 @@ import pytest
 
 from meshcorr import datasets as ds
 from meshcorr.errors import ParameterError
-from meshcorr.evaluation import TEAR_RATIO, map_quality
+from meshcorr.evaluation.metrics import TEAR_RATIO, map_quality
 from meshcorr.fmap import FunctionalMap, functional_map, point_map
-from meshcorr.mesh import Mesh
+from meshcorr.core.mesh import Mesh
 from meshcorr.precise import precise_map, project_to_triangles
 
 

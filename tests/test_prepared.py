@@ -13,7 +13,7 @@ import meshcorr
 from meshcorr import datasets as ds
 from meshcorr.cli import main
 from meshcorr.errors import ParameterError, PreparedShapeError
-from meshcorr.prepared import FORMAT_VERSION, SHAPE_SETTINGS, PreparedShape, mesh_digest, prepare
+from meshcorr.shapes.prepared import FORMAT_VERSION, SHAPE_SETTINGS, PreparedShape, mesh_digest, prepare
 
 
 @pytest.fixture(scope="module")
@@ -158,8 +158,8 @@ def test_prepared_shapes_with_user_landmarks_give_the_same_map(pair):
 def test_prepared_shape_carries_the_per_pair_quantities_through_its_file(pair, tmp_path):
     """What prepare computes for the pairs (curvature table, orientation regions, the distortion's source
     rows, the extremities) is there after save/load, and the loaded shape gives the same map."""
-    from meshcorr.extremities import spectrum_extremities
-    from meshcorr.selection import distortion_sources
+    from meshcorr.choice.extremities import spectrum_extremities
+    from meshcorr.choice.selection import distortion_sources
 
     shapes = [prepare(mesh, mode="scalable") for mesh in pair]
     for shape in shapes:

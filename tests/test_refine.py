@@ -15,9 +15,9 @@ from scipy.spatial import cKDTree
 import meshcorr
 from meshcorr import datasets as ds
 from meshcorr.errors import ParameterError
-from meshcorr.mesh import Mesh
-from meshcorr.orientation import orientation_score
-from meshcorr.refine import laplace_basis, prefetch_bases, refine_map, zoomout
+from meshcorr.core.mesh import Mesh
+from meshcorr.choice.orientation import orientation_score
+from meshcorr.stages.refine import laplace_basis, prefetch_bases, refine_map, zoomout
 
 
 @pytest.fixture(scope="module")
@@ -123,7 +123,7 @@ def test_laplace_basis_matches_a_dense_generalised_eigh_up_to_sign(poses):
 
 
 def test_pruned_search_equals_brute_force(poses):
-    from meshcorr.refine import _nearest_rows, _nearest_rows_pruned
+    from meshcorr.stages.refine import _nearest_rows, _nearest_rows_pruned
 
     rest, bent = poses
     _, phi1 = laplace_basis(rest, 20)
@@ -138,7 +138,7 @@ def test_pruned_search_equals_brute_force(poses):
 
 
 def test_zoomout_prunes_above_the_threshold_with_the_same_map(poses, monkeypatch):
-    import meshcorr.refine as refine_module
+    import meshcorr.stages.refine as refine_module
 
     rest, bent = poses
     start = noisy_identity(bent, 0.03)
@@ -162,9 +162,9 @@ def assert_blas_restored(script: str) -> None:
 _OVERLAPPING_REFINE = """
 import json, threading, time
 from threadpoolctl import threadpool_info
-import meshcorr.refine as refine
+import meshcorr.stages.refine as refine
 from meshcorr import datasets as ds
-from meshcorr.mesh import Mesh
+from meshcorr.core.mesh import Mesh
 
 real_eigsh, lock, barrier, entered = refine.eigsh, threading.Lock(), threading.Barrier(2), []
 
@@ -214,7 +214,7 @@ def test_prefetched_bases_are_the_ones_computed_directly(poses):
 
 
 def test_prefetch_reraises_the_worker_error_and_cancels_the_worker_after_an_error(poses, monkeypatch):
-    import meshcorr.refine as refine
+    import meshcorr.stages.refine as refine
 
     def failing(mesh, k, random_state, cancel):
         raise ParameterError("basis failed")
@@ -286,9 +286,9 @@ def test_match_restores_the_blas_thread_count():
 _INTERRUPTED_WAIT = """
 import signal, time
 from scipy.sparse.linalg import LinearOperator
-import meshcorr.refine as refine
+import meshcorr.stages.refine as refine
 from meshcorr import datasets as ds
-from meshcorr.mesh import Mesh
+from meshcorr.core.mesh import Mesh
 
 real_eigsh = refine.eigsh
 
@@ -324,8 +324,8 @@ def test_ctrl_c_while_waiting_for_the_bases_cancels_the_worker_and_exits_cleanly
 
 
 def test_single_precision_screen_gives_the_double_precision_answer(poses, monkeypatch):
-    import meshcorr.refine as refine_module
-    from meshcorr.refine import _nearest_rows, _nearest_rows_double, _single_precision_bound
+    import meshcorr.stages.refine as refine_module
+    from meshcorr.stages.refine import _nearest_rows, _nearest_rows_double, _single_precision_bound
 
     screened = []
     original = refine_module._single_precision_bound

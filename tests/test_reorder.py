@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from meshcorr.errors import ParameterError
-from meshcorr.reorder import configuration_cost, rank_configurations
+from meshcorr.stages.reorder import configuration_cost, rank_configurations
 
 
 @pytest.fixture(scope="module")
@@ -74,7 +74,7 @@ def test_brute_force_prescore_equals_kdtree_costs():
 
     from scipy.spatial import cKDTree
 
-    from meshcorr.reorder import _all_signs, _brute_costs
+    from meshcorr.stages.reorder import _all_signs, _brute_costs
 
     rng = np.random.default_rng(3)
     Xs = rng.normal(size=(40, 5)) * np.array([1.0, 0.7, 0.5, 0.35, 0.25])
@@ -93,7 +93,7 @@ def test_marginal_proxy_is_zero_for_the_true_configuration_and_higher_for_any_ot
     distribution matches; the quantile levels are symmetric, so flipped coordinates are scored exactly."""
     import itertools
 
-    from meshcorr.reorder import _all_signs, _marginal_costs
+    from meshcorr.stages.reorder import _all_signs, _marginal_costs
 
     X, Y, perm, signs = embeddings
     configs = [(p, s) for p in itertools.permutations(range(5)) for s in _all_signs(5)]
@@ -113,7 +113,7 @@ def test_exhaustive_screen_equals_the_best_of_the_full_list(embeddings):
     """The screen finds the 768 configurations of lowest proxy without listing all d! 2^d of them."""
     import itertools
 
-    from meshcorr.reorder import _MARGINAL_KEEP, _all_signs, _exhaustive_configurations, _marginal_costs
+    from meshcorr.stages.reorder import _MARGINAL_KEEP, _all_signs, _exhaustive_configurations, _marginal_costs
 
     X, Y, _, _ = embeddings
     full = [(p, s) for p in itertools.permutations(range(5)) for s in _all_signs(5)]

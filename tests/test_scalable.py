@@ -6,22 +6,22 @@ from scipy.linalg import orthogonal_procrustes
 from scipy.spatial import cKDTree
 
 import meshcorr
-from meshcorr import anchors as anchors_module
+from meshcorr.stages import anchors as anchors_module
 from meshcorr import datasets as ds
-from meshcorr.anchors import proximity_matching, select_anchors
+from meshcorr.stages.anchors import proximity_matching, select_anchors
 from meshcorr.cli import main
-from meshcorr.embedding import gaussian_affinity, spectral_embedding
+from meshcorr.spectral.embedding import gaussian_affinity, spectral_embedding
 from meshcorr.errors import MemoryLimitError, ParameterError
-from meshcorr.geodesics import geodesic_solver
-from meshcorr.icp import tps_icp
-from meshcorr.landmarks import farthest_point_sampling
-from meshcorr.memory import dense_memory, parse_memory
-from meshcorr.mesh import Mesh
-from meshcorr.modes import select_mode
-from meshcorr.nystrom import landmark_spectrum, nystrom_eigenpairs
-from meshcorr.reorder import _configured_queries, _to_target_frame
-from meshcorr.spectrum import dense_spectrum
-from meshcorr.timing import StageTimer
+from meshcorr.core.geodesics import geodesic_solver
+from meshcorr.stages.icp import tps_icp
+from meshcorr.core.sampling import farthest_point_sampling
+from meshcorr.runtime.memory import dense_memory, parse_memory
+from meshcorr.core.mesh import Mesh
+from meshcorr.spectral.modes import select_mode
+from meshcorr.spectral.nystrom import landmark_spectrum, nystrom_eigenpairs
+from meshcorr.stages.reorder import _configured_queries, _to_target_frame
+from meshcorr.spectral.spectrum import dense_spectrum
+from meshcorr.runtime.timing import StageTimer
 
 
 @pytest.fixture(scope="module")

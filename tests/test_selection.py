@@ -1,4 +1,4 @@
-"""Whole-map choice (meshcorr.selection), extremities and user landmarks (issue 12)."""
+"""Whole-map choice (meshcorr.choice.selection), extremities and user landmarks (issue 12)."""
 
 import numpy as np
 import pytest
@@ -7,12 +7,12 @@ from scipy.spatial import cKDTree
 import meshcorr
 from meshcorr import datasets
 from meshcorr.errors import LandmarkError, ParameterError
-from meshcorr.extremities import find_extremities, match_extremities
-from meshcorr.landmark_map import check_landmarks, landmark_map
-from meshcorr.mesh import Mesh, as_mesh
-from meshcorr.orientation import orientation_score, regional_orientation
-from meshcorr.selection import ORIENTATION_MIN, MapCandidate, choose_map, energy, score_candidates
-from meshcorr.shells import shell_refine
+from meshcorr.choice.extremities import find_extremities, match_extremities
+from meshcorr.stages.landmarks import check_landmarks, landmark_map
+from meshcorr.core.mesh import Mesh, as_mesh
+from meshcorr.choice.orientation import orientation_score, regional_orientation
+from meshcorr.choice.selection import ORIENTATION_MIN, MapCandidate, choose_map, energy, score_candidates
+from meshcorr.stages.shells import shell_refine
 
 # A left/right symmetric "person" on a sphere: head, two arms, two legs, a nose in front.
 TIPS = {"head": ((0, 0, 1), 0.9), "nose": ((0, 1, 0.2), 0.35), "arm_l": ((1, 0, 0.3), 0.8),
@@ -40,7 +40,7 @@ def person():
 
 
 def _geodesics(mesh):
-    from meshcorr.geodesics import geodesic_solver
+    from meshcorr.core.geodesics import geodesic_solver
 
     solver = geodesic_solver(mesh.vertices, mesh.faces, "heat")
     rows = {}
@@ -130,9 +130,9 @@ def test_landmarks_settle_the_left_right_choice(person):
 
 
 def test_the_landmarks_distances_join_the_shells_on_the_fine_schedule(person, monkeypatch):
-    import meshcorr.pipeline as pipeline
-    import meshcorr.selection as selection
-    from meshcorr.shells import SCALES
+    import meshcorr.pipeline.run as pipeline
+    import meshcorr.choice.selection as selection
+    from meshcorr.stages.shells import SCALES
 
     mesh = person[0]
     calls = []
@@ -248,8 +248,8 @@ def test_the_orientation_counts_in_the_energy_of_maps_the_shells_refined():
 
 
 def test_a_map_with_swapped_legs_is_repaired_from_its_consistent_part(person):
-    from meshcorr.orientation import consistent_vertices
-    from meshcorr.repair import repair_candidates, repair_map
+    from meshcorr.choice.orientation import consistent_vertices
+    from meshcorr.choice.repair import repair_candidates, repair_map
 
     mesh, mirror = person
     identity = np.arange(mesh.n_vertices)

@@ -14,11 +14,11 @@ import json
 import pytest
 import trimesh
 
-import meshcorr.benchmark as benchmark
+import meshcorr.evaluation.benchmark as benchmark
 from meshcorr import datasets as ds
 from meshcorr.cli import EXIT_USAGE, main
 from meshcorr.errors import ParameterError
-from meshcorr.methods import _LATER_CHECKS, check_options, method_function, method_options, run_method
+from meshcorr.pipeline.methods import _LATER_CHECKS, check_options, method_function, method_options, run_method
 
 SHAPE = ds.tube(n_along=10, n_around=6)
 
@@ -45,7 +45,7 @@ BAD = [
     ("spectral", "reorder", "nonsense", "The 'reorder' parameter must be one of 'exhaustive', 'greedy', "
                                         "'signs', 'signs-greedy', 'none'. Got 'nonsense' instead."),  # a bad choice
     ("spectral", "bijective", "true", "The 'bijective' parameter must be True or False. Got 'true' instead."),
-    # checked by the method only once the meshes are loaded (meshcorr.icp.tps_icp, meshcorr.modes.select_mode)
+    # checked by the method only once the meshes are loaded (meshcorr.stages.icp.tps_icp, meshcorr.spectral.modes.select_mode)
     ("spectral", "icp_iterations", "-1", "The 'icp_iterations' parameter must be an int >= 0. Got -1 instead."),
     ("spectral", "n_control", "6", "The 'n_control' parameter must be an int >= 7. Got 6 instead."),
     ("spectral", "scalable_above", "'many'", "The 'scalable_above' parameter must be an int. Got 'many' instead."),
@@ -151,14 +151,14 @@ def batch_args(tmp_path, *extra):
 
 @pytest.fixture()
 def batches(monkeypatch):
-    """meshcorr.collection.batch records its options instead of starting a cluster."""
+    """meshcorr.collection.batch.batch records its options instead of starting a cluster."""
     made = []
 
     def fake(pairs, out, **kwargs):
         made.append(kwargs)
         return []
 
-    monkeypatch.setattr("meshcorr.collection.batch", fake)
+    monkeypatch.setattr("meshcorr.collection.batch.batch", fake)
     return made
 
 
@@ -190,8 +190,8 @@ def test_batch_passes_good_set_values_on_and_blames_a_bad_flag_on_itself(tmp_pat
 
 
 def test_the_batch_library_checks_every_value_before_any_work(tmp_path, monkeypatch):
-    pytest.importorskip("distributed", reason="meshcorr.collection.batch needs meshcorr[dask]")
-    from meshcorr import collection
+    pytest.importorskip("distributed", reason="meshcorr.collection.batch.batch needs meshcorr[dask]")
+    from meshcorr.collection import batch as collection
 
     def no_cluster(*args, **kwargs):
         raise AssertionError("a cluster was started")
@@ -219,7 +219,7 @@ def test_help_says_set_values_are_literals_checked_before_any_work(capsys, comma
 def test_baseline_switches_take_only_true_or_false(method, option):
     # "false" from a --set is no Python literal: it stayed the string 'false', and ran as True.
     from meshcorr import datasets
-    from meshcorr.methods import run_method
+    from meshcorr.pipeline.methods import run_method
 
     with pytest.raises(ParameterError, match=f"'{option}' parameter must be True or False"):
         check_options(method, **{option: "false"})

@@ -5,12 +5,12 @@ import pytest
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
-from meshcorr import cuts
+from meshcorr.evaluation import cuts as cuts
 from meshcorr import datasets as ds
 from meshcorr.errors import ParameterError
-from meshcorr.mesh import Mesh
-from meshcorr.refine import refine_map
-from meshcorr.shells import shell_refine
+from meshcorr.core.mesh import Mesh
+from meshcorr.stages.refine import refine_map
+from meshcorr.stages.shells import shell_refine
 
 
 @pytest.fixture(scope="module")
@@ -223,7 +223,7 @@ def test_an_inside_out_file_is_aligned_by_its_outward_normals(poses):
 
 
 def test_a_given_orientation_score_decides_the_side(poses):
-    from meshcorr.orientation import orientation_score
+    from meshcorr.choice.orientation import orientation_score
 
     rest, bent = poses
     zoomed, _ = refine_map(rest, bent, np.arange(rest.n_vertices), k=30)
@@ -258,7 +258,7 @@ def test_a_sheet_without_a_reliable_outside_is_still_aligned():
     import warnings
 
     import meshcorr
-    from meshcorr.orientation import mesh_orientation
+    from meshcorr.choice.orientation import mesh_orientation
 
     n = 24
     x, y = np.meshgrid(np.linspace(-1.0, 1.3, n), np.linspace(-1.0, 1.0, n))

@@ -15,7 +15,7 @@ pytest.importorskip("matplotlib")
 
 from meshcorr import datasets  # noqa: E402
 from meshcorr.cli import main  # noqa: E402
-from meshcorr.evaluation import GeodesicCache  # noqa: E402
+from meshcorr.evaluation.metrics import GeodesicCache  # noqa: E402
 from meshcorr.io import write_map, write_mesh  # noqa: E402
 from meshcorr.viz.figures import correspondence_figure, spectrum_figure  # noqa: E402
 

@@ -15,10 +15,10 @@ from scipy.spatial import cKDTree
 import meshcorr
 from meshcorr import datasets as ds
 from meshcorr.errors import MeshWarning, ParameterError
-from meshcorr.mesh import Mesh
-from meshcorr.orientation import orient_outward, orientation_score, vertex_normals
-from meshcorr.reorder import Configuration
-from meshcorr.symmetry import Candidate, candidate_ranks, choose, metric_distortion, right_map_missing
+from meshcorr.core.mesh import Mesh
+from meshcorr.choice.orientation import orient_outward, orientation_score, vertex_normals
+from meshcorr.stages.reorder import Configuration
+from meshcorr.choice.symmetry import Candidate, candidate_ranks, choose, metric_distortion, right_map_missing
 
 
 def creature(subdivisions: int = 3):
@@ -329,7 +329,7 @@ def test_candidates_are_widened_when_the_right_map_is_missing(pair, monkeypatch,
     # Score a single near-tied configuration: rank 0 or 1, one of which is the mirror
     # image. With the mirror alone no candidate preserves orientation, so the pipeline
     # must widen the set and still find the right side.
-    import meshcorr.pipeline as pipeline
+    import meshcorr.pipeline.run as pipeline
 
     src, tgt, truth, mirror = pair
     monkeypatch.setattr(pipeline, "candidate_ranks", lambda configurations: [only])

@@ -10,7 +10,7 @@ from PIL import Image
 import meshcorr
 from meshcorr import datasets as ds
 from meshcorr.errors import MeshError, ParameterError
-from meshcorr.texture import TexturedMesh, read_textured_obj, transfer_uv, write_textured_obj
+from meshcorr.maps.texture import TexturedMesh, read_textured_obj, transfer_uv, write_textured_obj
 
 
 def _checker() -> Image.Image:

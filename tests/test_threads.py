@@ -5,8 +5,8 @@ import threading
 import numpy as np
 import pytest
 
-import meshcorr._threads as threads_module
-from meshcorr._threads import parallel_map
+import meshcorr.runtime.threads as threads_module
+from meshcorr.runtime.threads import parallel_map
 
 #: Seconds a task waits for the others before it gives up: a deadlock guard, not a timing.
 PATIENCE = 60.0

@@ -1,4 +1,4 @@
-"""Tests for meshcorr.validate: every check is triggered by a small hand-made mesh."""
+"""Tests for meshcorr.core.validate: every check is triggered by a small hand-made mesh."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from meshcorr.errors import MeshError, ParameterError
-from meshcorr.validate import validate_mesh
+from meshcorr.core.validate import validate_mesh
 
 TET_V = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
 TET_F = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
@@ -297,7 +297,7 @@ def _repeated_rows_reference(rows) -> np.ndarray:
 @pytest.mark.parametrize("n_values", [50, 1_000, 3_000_000])
 def test_repeated_rows_match_a_reference(n_values):
     """The int64-key duplicate test (and its fallback for huge meshes) against a set of tuples."""
-    from meshcorr.validate import _repeated_rows
+    from meshcorr.core.validate import _repeated_rows
 
     rng = np.random.default_rng(0)
     rows = np.sort(rng.integers(0, 8, size=(400, 3)), axis=1) * (n_values // 8)
@@ -308,7 +308,7 @@ def test_repeated_rows_match_a_reference(n_values):
 
 def test_repeated_rows_of_a_huge_mesh_do_not_collide():
     """At 3 million vertices a * n**2 + b * n + c overflows int64: two different rows share a key."""
-    from meshcorr.validate import _repeated_rows
+    from meshcorr.core.validate import _repeated_rows
 
     n = 3_000_000
     # (a, b, c) with a * n**2 + b * n + c == 2**64, whose int64 key wraps to 0, the key of (0, 0, 0).

@@ -2,7 +2,7 @@
 
 The one-call entry point is :func:`match`; :class:`Matcher` is the staged
 form (settings first, ``fit`` later) with its :class:`Settings`. See
-:mod:`meshcorr.pipeline` for the method (Jain & Zhang, SMI 2006) and
+:mod:`meshcorr.pipeline.run` for the method (Jain & Zhang, SMI 2006) and
 ``docs/method.md`` for its choices.
 
 The public names are imported on first use (PEP 562): ``import meshcorr``
@@ -13,23 +13,23 @@ pulls in Dask only when it runs.
 
 from importlib import import_module
 
+from ._moved import PUBLIC_MODULES, install as _install_old_paths, moved_attribute as _moved_attribute
 from ._version import __version__
 from .errors import (InputError, LandmarkError, MeshError, MeshWarning, MeshcorrError, ParameterError,
                      PartialityError, PartialShapeWarning, PreparedShapeError)
 
 #: Public name -> (module, attribute); attribute None for a public submodule.
 _LAZY = {
-    "match": ("pipeline", "match"),
-    "Matcher": ("matcher", "Matcher"),
-    "Settings": ("settings", "Settings"),
-    "prepare": ("prepared", "prepare"),
-    "PreparedShape": ("prepared", "PreparedShape"),
-    "batch": ("collection", "batch"),
-    "Correspondence": ("result", "Correspondence"),
-    "Mesh": ("mesh", "Mesh"),
-    "as_mesh": ("mesh", "as_mesh"),
-    **{name: (name, None) for name in ("datasets", "evaluation", "fmap", "precise", "progress", "transfer",
-                                       "viz")},
+    "match": ("pipeline.run", "match"),
+    "Matcher": ("pipeline.matcher", "Matcher"),
+    "Settings": ("pipeline.settings", "Settings"),
+    "prepare": ("shapes.prepared", "prepare"),
+    "PreparedShape": ("shapes.prepared", "PreparedShape"),
+    "batch": ("collection.batch", "batch"),
+    "Correspondence": ("maps.result", "Correspondence"),
+    "Mesh": ("core.mesh", "Mesh"),
+    "as_mesh": ("core.mesh", "as_mesh"),
+    **{name: (path, None) for name, path in PUBLIC_MODULES.items()},
 }
 
 __all__ = ["match", "Matcher", "Settings", "prepare", "PreparedShape", "batch", "Correspondence", "Mesh",
@@ -40,6 +40,9 @@ __all__ = ["match", "Matcher", "Settings", "prepare", "PreparedShape", "batch", 
 
 def __getattr__(name: str):
     if name not in _LAZY:
+        moved = _moved_attribute(name)  # a module of the flat layout (meshcorr._moved)
+        if moved is not None:
+            return moved
         raise AttributeError(f"module 'meshcorr' has no attribute {name!r}")
     module, attribute = _LAZY[name]
     value = import_module(f".{module}", __name__)
@@ -51,3 +54,6 @@ def __getattr__(name: str):
 
 def __dir__() -> list[str]:
     return sorted(set(globals()) | set(__all__))
+
+
+_install_old_paths()

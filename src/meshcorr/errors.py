@@ -65,4 +65,4 @@ class MemoryLimitError(ParameterError):
 
 
 class PartialShapeWarning(MeshWarning):
-    """One shape looks like a part of the other, but ``partial`` was not given (see :mod:`meshcorr.partial`)."""
+    """One shape looks like a part of the other, but ``partial`` was not given (see :mod:`meshcorr.pipeline.partial`)."""

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..anchors import proximity_matching
-from ..laplacian import vertex_areas
-from ..mesh import Mesh, MeshLike, as_mesh
-from ..result import Correspondence
-from ..timing import StageTimer
+from ..stages.anchors import proximity_matching
+from ..core.laplacian import vertex_areas
+from ..core.mesh import Mesh, MeshLike, as_mesh
+from ..maps.result import Correspondence
+from ..runtime.timing import StageTimer
 from .align import align_pair
 
 _NO_ANCHORS = np.zeros((0, 0))
@@ -36,7 +36,7 @@ def spatial_points(src: Mesh, tgt: Mesh, *, prealign: bool, timer: StageTimer) -
     if not prealign:
         return np.array(src.vertices), np.array(tgt.vertices)
     with timer.stage("prealign"):
-        # Lumped vertex areas (of a point cloud: its Laplacian's, meshcorr.laplacian).
+        # Lumped vertex areas (of a point cloud: its Laplacian's, meshcorr.core.laplacian).
         return align_pair(src.vertices, tgt.vertices, vertex_areas(src), vertex_areas(tgt))
 
 

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .._threads import kdtree_query
+from ..runtime.threads import kdtree_query
 
 #: The proper sign changes of three axes: the identity and the half-turns about each axis.
 HALF_TURNS = (np.eye(3), np.diag([1.0, -1.0, -1.0]), np.diag([-1.0, 1.0, -1.0]), np.diag([-1.0, -1.0, 1.0]))

@@ -38,11 +38,11 @@ import numpy as np
 from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
-from .._params import check_float, check_int
-from .._threads import kdtree_query
-from ..mesh import MeshLike
-from ..result import Correspondence
-from ..timing import StageProgress, StageTimer
+from ..runtime.checks import check_float, check_int
+from ..runtime.threads import kdtree_query
+from ..core.mesh import MeshLike
+from ..maps.result import Correspondence
+from ..runtime.timing import StageProgress, StageTimer
 from ._common import finish, load_pair, nearest_map, spatial_points
 from .align import HALF_TURNS, Similarity
 

@@ -47,12 +47,12 @@ from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
-from .._params import check_choice, check_float, check_int
-from .._threads import kdtree_query
-from ..mesh import MeshLike
-from ..result import Correspondence
-from ..timing import StageProgress, StageTimer
-from ..tps import mean_pairwise_distance
+from ..runtime.checks import check_choice, check_float, check_int
+from ..runtime.threads import kdtree_query
+from ..core.mesh import MeshLike
+from ..maps.result import Correspondence
+from ..runtime.timing import StageProgress, StageTimer
+from ..stages.tps import mean_pairwise_distance
 from ._common import finish, load_pair, nearest_map, spatial_points
 from .sampling import farthest_point_sample
 

@@ -1,8 +1,8 @@
 """Shapiro & Brady's eigenvector correspondence, and its "improved" variant.
 
 The first baseline of Jain & Zhang (2006), built from the same spectral
-blocks as the main method (:mod:`meshcorr.spectrum`, :mod:`meshcorr.reorder`,
-:mod:`meshcorr.anchors`) with the later stages switched off:
+blocks as the main method (:mod:`meshcorr.spectral.spectrum`, :mod:`meshcorr.stages.reorder`,
+:mod:`meshcorr.stages.anchors`) with the later stages switched off:
 
 1. Gaussian affinities of all-pairs geodesic distances on each mesh,
    :math:`A_{ij} = \\exp(-D_{ij}^2 / 2\\sigma^2)`, :math:`\\sigma` the largest
@@ -26,13 +26,13 @@ Shape Modeling International 2006 (the scaled "improved" variant, sec. 4).
 
 from __future__ import annotations
 
-from .._params import check_choice, check_int
-from ..geodesics import GEODESIC_METHODS
-from ..mesh import MeshLike
-from ..reorder import rank_configurations
-from ..result import Correspondence
-from ..spectrum import dense_spectrum
-from ..timing import StageProgress, StageTimer
+from ..runtime.checks import check_choice, check_int
+from ..core.geodesics import GEODESIC_METHODS
+from ..core.mesh import MeshLike
+from ..stages.reorder import rank_configurations
+from ..maps.result import Correspondence
+from ..spectral.spectrum import dense_spectrum
+from ..runtime.timing import StageProgress, StageTimer
 from ._common import finish, load_pair, nearest_map
 
 

@@ -22,7 +22,7 @@ a thin-plate spline :math:`f`, alternating at each temperature :math:`T`:
    + \\lambda_2 \\lVert A - I \\rVert_F^2`,
    :math:`\\mu_a = \\sum_{i \\le N} m_{ai}` (points matched to the outlier
    count less), :math:`A` the linear part of the affine term, with the 3D
-   spline kernel :math:`\\phi(r) = -r` (:mod:`meshcorr.tps`) and
+   spline kernel :math:`\\phi(r) = -r` (:mod:`meshcorr.stages.tps`) and
    :math:`\\lambda_1 = \\lambda_{1,0} K T`, :math:`\\lambda_2 = \\lambda_{2,0} K T`:
    both regularisers are annealed with :math:`T` (see :class:`RegularisedTPS`).
 
@@ -58,11 +58,11 @@ import numpy as np
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
-from .._params import check_float, check_int
-from .._threads import single_blas_thread
-from ..mesh import MeshLike
-from ..result import Correspondence
-from ..timing import StageProgress, StageTimer
+from ..runtime.checks import check_float, check_int
+from ..runtime.threads import single_blas_thread
+from ..core.mesh import MeshLike
+from ..maps.result import Correspondence
+from ..runtime.timing import StageProgress, StageTimer
 from ._common import finish, load_pair, nearest_map, spatial_points
 from .sampling import farthest_point_sample
 

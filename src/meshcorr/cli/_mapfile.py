@@ -17,11 +17,11 @@ def read_checked_map(path: str, n_source: int, n_target: int) -> np.ndarray:
     ------
     InputError
         Unreadable, or not one entry in ``[-1, n_target)`` per source vertex
-        (:func:`meshcorr.transfer.check_map`, whose :class:`ParameterError`
+        (:func:`meshcorr.maps.transfer.check_map`, whose :class:`ParameterError`
         is about an argument; here the file is the data at fault).
     """
     from ..io import read_map
-    from ..transfer import check_map
+    from ..maps.transfer import check_map
 
     mapping = read_map(path, name="MAP")
     try:

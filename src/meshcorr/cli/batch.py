@@ -7,8 +7,8 @@ import os
 import sys
 import time
 
-from ..geodesics import GEODESIC_METHODS
-from ..modes import MODES, N_SAMPLES
+from ..core.geodesics import GEODESIC_METHODS
+from ..spectral.modes import MODES, N_SAMPLES
 
 HELP = "map many pairs (a list, all pairs of a collection, or onto a template) on Dask (resumable)"
 
@@ -32,7 +32,7 @@ or whose --gt differs); a failed pair (e.g. a bad mesh) is
 recorded and the others go on. Exit code: 0 if every pair was mapped, 4 if
 any failed. With --all-pairs, --consistency also reports the cycle-consistency
 error and writes maps made consistent through the collection (see
-meshcorr.consistency).
+meshcorr.collection.consistency).
 
 --all-pairs with --hub SHAPE (or --hub auto: the shape whose Laplace-Beltrami
 spectrum is most like the others') matches only the n-1 pairs from each shape
@@ -98,7 +98,7 @@ def add_parser(sub) -> None:
 
 
 def _pairs(args) -> list[tuple[str, str]]:
-    from ..collection import all_pairs, read_pairs, template_pairs
+    from ..collection.batch import all_pairs, read_pairs, template_pairs
     from ..errors import ParameterError
 
     if args.shapes and not args.template:
@@ -136,11 +136,11 @@ FLAGGED = {"k": "-k", "geodesic": "--geodesic", "random_state": "--seed", "refin
 def _options(items: list[str], flags: dict | None = None) -> dict:
     """The options of meshcorr.match: ``flags`` (given by this command's flags), then each --set KEY=VALUE.
 
-    Each is checked as :func:`meshcorr.collection.batch` checks its options (every value as
-    meshcorr.match would take it, :func:`meshcorr.methods.check_options`), before any work: a
+    Each is checked as :func:`meshcorr.collection.batch.batch` checks its options (every value as
+    meshcorr.match would take it, :func:`meshcorr.pipeline.methods.check_options`), before any work: a
     value that every pair would fail on names its --set item.
     """
-    from ..collection import _split_options
+    from ..collection.batch import _split_options
     from ..errors import ParameterError
     from .bench import _value, checked_set
 
@@ -185,7 +185,7 @@ def _duration(seconds: float) -> str:
 
 
 def run(args) -> int:
-    from ..collection import batch
+    from ..collection.batch import batch
 
     pairs = _pairs(args)
     flags = dict(k=args.k, geodesic=args.geodesic, random_state=args.seed, refine=args.refine, shells=args.shells,
@@ -199,7 +199,7 @@ def run(args) -> int:
     options = _options(args.set, flags)
     client = None
     if args.scheduler:
-        from ..collection import connect
+        from ..collection.batch import connect
 
         client = connect(args.scheduler)
     try:
@@ -211,7 +211,7 @@ def run(args) -> int:
             client.close()
     failed = [r for r in records if r["status"] != "ok"]
     if args.consistency:
-        from ..consistency import consistency_report
+        from ..collection.consistency import consistency_report
 
         report = consistency_report(args.out, args.all_pairs, records, geodesic=args.geodesic,
                                     random_state=args.seed)

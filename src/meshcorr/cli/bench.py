@@ -9,7 +9,7 @@ import time
 from pathlib import Path
 from typing import Callable
 
-from ..geodesics import GEODESIC_METHODS
+from ..core.geodesics import GEODESIC_METHODS
 from .match import seed
 
 HELP = "benchmark methods on a dataset of pairs with ground truth (resumable)"
@@ -86,7 +86,7 @@ _RESERVED = {"method": "--methods", "random_state": "--seed", "progress": "-q", 
 
 def _options_of(method: str) -> tuple[str, ...]:
     """The keywords ``--set METHOD:KEY=VALUE`` may give ``method`` (an unknown one failed every pair)."""
-    from ..methods import applicable
+    from ..pipeline.methods import applicable
 
     return tuple(name for name in applicable(method) if name not in _RESERVED and name != "n_landmarks")
 
@@ -100,9 +100,9 @@ def _value(text: str):
 
 def method_options(methods: list[str], k, geodesic, settings: list[str]) -> dict[str, dict]:
     """``{method: {option: value}}`` from -k, --geodesic and --set METHOD:KEY=VALUE."""
-    from ..benchmark import SPECTRAL_FAMILY
+    from ..evaluation.benchmark import SPECTRAL_FAMILY
     from ..errors import ParameterError
-    from ..methods import check_options
+    from ..pipeline.methods import check_options
 
     try:  # the baselines say which options each method takes
         from ..baselines import method_options as takes
@@ -177,7 +177,7 @@ class PairProgress:
 def run(args) -> int:
     import os
 
-    from ..benchmark import check_methods, run_benchmark, summarize, write_summary
+    from ..evaluation.benchmark import check_methods, run_benchmark, summarize, write_summary
     from ..errors import ParameterError
 
     methods = check_methods([m.strip() for m in args.methods.split(",") if m.strip()])
@@ -186,7 +186,7 @@ def run(args) -> int:
         raise ParameterError(f"--out {args.out} is the dataset folder DATASET_DIR: the results would be mixed "
                              "with its meshes. Give another --out folder.")
     if not args.no_plot:
-        from ..plots import require_matplotlib
+        from ..viz.plots import require_matplotlib
 
         require_matplotlib()
     rows = run_benchmark(args.dataset, methods, args.out, n_pairs=args.pairs, method_options=options,
@@ -196,7 +196,7 @@ def run(args) -> int:
     table, curves = summarize(rows, args.out)
     md, _ = write_summary(table, args.out, title=f"meshcorr bench {args.dataset}")
     if curves and not args.no_plot:
-        from ..plots import plot_cumulative_curves
+        from ..viz.plots import plot_cumulative_curves
 
         styles = {label: "--" if label.endswith("(flips forgiven)") else "-" for label in curves}
         colour = {m: f"C{i}" for i, m in enumerate(e["method"] for e in table)}

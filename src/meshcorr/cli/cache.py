@@ -28,7 +28,7 @@ def _size(n: int) -> str:
 
 
 def run(args) -> int:
-    from ..cache import ShapeCache
+    from ..shapes.cache import ShapeCache
     from ..errors import OutputError
 
     cache = ShapeCache(args.dir)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..geodesics import GEODESIC_METHODS
+from ..core.geodesics import GEODESIC_METHODS
 from .match import progress_for, seed
 from .show import add_camera_arguments, check_png
 
@@ -54,7 +54,7 @@ def check_memory(name: str, n_vertices: int, max_memory) -> None:
     (Such a mesh ran for minutes and then ended as 'out of memory', or was killed.)
     """
     from ..errors import MemoryLimitError
-    from ..memory import default_max_memory, dense_memory, parse_memory
+    from ..runtime.memory import default_max_memory, dense_memory, parse_memory
 
     limit = default_max_memory() if max_memory is None else parse_memory(max_memory)
     need = dense_memory(n_vertices, 0)
@@ -67,9 +67,9 @@ def check_memory(name: str, n_vertices: int, max_memory) -> None:
 
 
 def run(args) -> int:
-    from .._params import check_int
-    from ..mesh import as_mesh
-    from ..plots import require_matplotlib
+    from ..runtime.checks import check_int
+    from ..core.mesh import as_mesh
+    from ..viz.plots import require_matplotlib
     from ..viz.figures import spectrum_figure
     from ..io import check_outputs
 
@@ -77,7 +77,7 @@ def run(args) -> int:
     check_outputs({"-o": args.output}, {"MESH": args.mesh})
     check_int("n_eigenvectors", args.n_eigenvectors, minimum=1, maximum=30)
     if args.max_memory is not None:
-        from ..memory import parse_memory
+        from ..runtime.memory import parse_memory
 
         parse_memory(args.max_memory)
     require_matplotlib()

@@ -8,7 +8,7 @@ import sys
 
 import numpy as np
 
-from ..geodesics import GEODESIC_METHODS
+from ..core.geodesics import GEODESIC_METHODS
 
 HELP = "score a vertex map against ground truth (geodesic error)"
 
@@ -66,7 +66,7 @@ def add_parser(sub) -> None:
 
 
 def _thresholds(text: str) -> list[float]:
-    from .._params import check_float
+    from ..runtime.checks import check_float
     from ..errors import ParameterError
 
     try:
@@ -88,7 +88,7 @@ def _sym_spec(gt: list[str], sym: list[str]) -> list[str]:
 def _restrict_to_piece(target, mapping: np.ndarray, truths: list, quiet: bool, where: str):
     """The map and truths renumbered onto TARGET's kept piece (``target.kept``): map entries elsewhere
     become -1 (misses), truth pairs elsewhere are left out; each change is said on stderr."""
-    from ..ground_truth import GroundTruth
+    from ..evaluation.ground_truth import GroundTruth
 
     new_index = np.full(target.n_original, -1, dtype=np.int64)
     new_index[target.kept] = np.arange(target.n_vertices)
@@ -131,17 +131,17 @@ def _finite(value):
 
 def run(args) -> int:
     from ..errors import InputError
-    from ..evaluation import GeodesicCache, cumulative_curve, evaluate_map, map_quality, scalar_summary
-    from ..ground_truth import load_ground_truth
+    from ..evaluation.metrics import GeodesicCache, cumulative_curve, evaluate_map, map_quality, scalar_summary
+    from ..evaluation.ground_truth import load_ground_truth
     from ..io import check_outputs, read_mesh
     from ._mapfile import read_checked_map
     from .match import progress_for
-    from ..mesh import Mesh, as_mesh
+    from ..core.mesh import Mesh, as_mesh
     from .show import check_png, one_surface, truth_inputs
 
     thresholds = _thresholds(args.thresholds)
     if args.curve:
-        from ..plots import require_matplotlib
+        from ..viz.plots import require_matplotlib
 
         check_png(args.curve, "--curve")
         check_outputs({"--curve": args.curve},
@@ -177,7 +177,7 @@ def run(args) -> int:
     summary.update(map_quality(Mesh(*source, name=args.source), target, mapping))
     summary.update(source=args.source, target=args.target, map=args.map, geodesic=args.geodesic)
     if args.curve:  # the last work: an interrupt before it leaves no curve behind
-        from ..plots import plot_cumulative_curves
+        from ..viz.plots import plot_cumulative_curves
 
         curves = {"direct truth": cumulative_curve(report["errors"])}
         if sym is not None:

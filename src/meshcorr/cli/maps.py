@@ -125,7 +125,7 @@ def _load_fmap(path, source, target):
     import zipfile
 
     from ..errors import InputError, ParameterError
-    from ..fmap import FunctionalMap
+    from ..spectral.fmap import FunctionalMap
 
     if os.path.isfile(path) and not zipfile.is_zipfile(path):  # np.load read a .npy as one array, and
         # any other file as a pickle, whose message suggested loading it unsafely
@@ -152,8 +152,8 @@ def _check_outputs(args, outputs: dict) -> None:
 def run_texture(args) -> int:
     from pathlib import Path
 
-    from ..precise import precise_map
-    from ..texture import read_textured_obj, transfer_uv, write_textured_obj
+    from ..maps.precise import precise_map
+    from ..maps.texture import read_textured_obj, transfer_uv, write_textured_obj
 
     from ..io import check_outputs, staged_writes
 
@@ -179,7 +179,7 @@ def run_texture(args) -> int:
 
 def run_fmap(args) -> int:
     from ..errors import ParameterError
-    from ..fmap import functional_map
+    from ..spectral.fmap import functional_map
     from ..io import write_map
 
     _check_outputs(args, {"-o": args.output})

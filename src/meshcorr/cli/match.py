@@ -12,10 +12,10 @@ import numpy as np
 
 from ..baselines import METHODS, SPATIAL_METHODS
 from ..errors import InputError, LandmarkError, ParameterError
-from ..geodesics import GEODESIC_METHODS
-from ..modes import MODES, N_SAMPLES, SCALABLE_ABOVE
-from ..pipeline import REFINE_K
-from ..reorder import REORDER_MODES
+from ..core.geodesics import GEODESIC_METHODS
+from ..spectral.modes import MODES, N_SAMPLES, SCALABLE_ABOVE
+from ..pipeline.run import REFINE_K
+from ..stages.reorder import REORDER_MODES
 from ._mapfile import print_map
 from ._progress import StageProgress
 
@@ -283,12 +283,12 @@ def _read_landmarks(args):
     (1 in a ``.vts``).
     """
     if args.landmarks_file is not None:
-        from ..landmark_map import read_landmark_lines
+        from ..stages.landmarks import read_landmark_lines
 
         pairs, numbers = read_landmark_lines(args.landmarks_file)
         return pairs, ((args.landmarks_file,) * 2, np.stack([numbers, numbers], axis=1), 0)
     if args.landmarks_vts:
-        from ..ground_truth import read_vts_lines
+        from ..evaluation.ground_truth import read_vts_lines
 
         (a, lines_a), (b, lines_b) = (read_vts_lines(path, "landmark") for path in args.landmarks_vts)
         if len(a) != len(b):
@@ -325,8 +325,8 @@ def _write_report(args, mapping, summary: dict) -> None:
     """The HTML report of ``--report``, with the error curve when ``--gt`` is given."""
     import numpy as np
 
-    from ..evaluation import geodesic_errors
-    from ..ground_truth import load_ground_truth
+    from ..evaluation.metrics import geodesic_errors
+    from ..evaluation.ground_truth import load_ground_truth
     from ..io import read_mesh
     from ..viz.report import write_report
 

@@ -7,7 +7,7 @@ import sys
 
 import numpy as np
 
-from ..geodesics import GEODESIC_METHODS
+from ..core.geodesics import GEODESIC_METHODS
 
 HELP = "draw a vertex map as a PNG: the target coloured by part, the source through the map"
 
@@ -91,7 +91,7 @@ def one_surface(path, what: str, why: str, name: str | None = None):
     ``name`` is its file.
     """
     from ..errors import MeshError
-    from ..mesh import as_mesh
+    from ..core.mesh import as_mesh
 
     name = name or str(path)
     try:
@@ -108,7 +108,7 @@ def one_surface(path, what: str, why: str, name: str | None = None):
 
 def dense_truth(spec, n_source: int, n_target: int) -> np.ndarray:
     """A ground truth as a dense map: ``truth[i]`` = true target of source ``i``, -1 if none."""
-    from ..ground_truth import load_ground_truth
+    from ..evaluation.ground_truth import load_ground_truth
 
     pairs = load_ground_truth(spec, n_source=n_source, n_target=n_target)
     truth = np.full(n_source, -1, dtype=np.int64)
@@ -120,7 +120,7 @@ def run(args) -> int:
     from ..errors import ParameterError
     from ..io import read_mesh
     from ._mapfile import read_checked_map
-    from ..plots import require_matplotlib
+    from ..viz.plots import require_matplotlib
     from ..viz.figures import correspondence_figure
     from ..io import check_outputs
     from .match import progress_for

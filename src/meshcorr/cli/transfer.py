@@ -42,9 +42,9 @@ def add_parser(sub) -> None:
 
 def _read_attribute(args, vertices, faces):
     """TARGET's values named by --attribute: a name or an attribute FILE that cannot be used is refused
-    by :func:`meshcorr.transfer.read_attribute` (a name that is neither an attribute nor a file: exit 2;
+    by :func:`meshcorr.maps.transfer.read_attribute` (a name that is neither an attribute nor a file: exit 2;
     a file that cannot be used: bad input data, exit 3)."""
-    from ..transfer import read_attribute
+    from ..maps.transfer import read_attribute
 
     return read_attribute(args.attribute, args.target, vertices, faces)
 
@@ -52,7 +52,7 @@ def _read_attribute(args, vertices, faces):
 def run(args) -> int:
     from ..errors import ParameterError
     from ..io import read_mesh, staged_writes, write_mesh
-    from ..transfer import transfer_attribute, write_values
+    from ..maps.transfer import transfer_attribute, write_values
     from ._mapfile import read_checked_map
     from ..io import check_outputs
 

@@ -18,8 +18,8 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from .._params import check_choice, check_int
-from ..pointcloud import edges as graph_edges
+from ..runtime.checks import check_choice, check_int
+from ..core.pointcloud import edges as graph_edges
 
 __all__ = ["COLORINGS", "COLORMAPS", "UNMAPPED_COLOR", "coordinate_colors", "mesh_coloring",
            "part_colors", "scalar_colors"]
@@ -137,7 +137,7 @@ def part_colors(vertices, faces, *, n_parts: int = 8, softness: float = 0.06) ->
     vertices : (n, 3) float
     faces : (m, 3) int
         Triangles; ``m = 0`` for a point cloud (its graph joins each point to
-        its nearest neighbours, :func:`meshcorr.pointcloud.edges`).
+        its nearest neighbours, :func:`meshcorr.core.pointcloud.edges`).
     n_parts : int
         Seeds (at most 10 distinct colours; more repeat the palette).
     softness : float

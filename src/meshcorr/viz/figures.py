@@ -14,13 +14,13 @@ from contextlib import contextmanager, nullcontext
 
 import numpy as np
 
-from .._params import check_int
-from ..embedding import gaussian_affinity, top_eigenpairs
+from ..runtime.checks import check_int
+from ..spectral.embedding import gaussian_affinity, top_eigenpairs
 from ..errors import ParameterError
-from ..evaluation import GeodesicCache, geodesic_errors
-from ..mesh import as_mesh
-from ..progress import as_progress
-from ..transfer import check_map, pull_back
+from ..evaluation.metrics import GeodesicCache, geodesic_errors
+from ..core.mesh import as_mesh
+from ..runtime.progress import as_progress
+from ..maps.transfer import check_map, pull_back
 from .colors import UNMAPPED_COLOR, mesh_coloring, scalar_colors
 from .render import Panel, render_panels
 
@@ -42,7 +42,7 @@ def correspondence_errors(target, mapping: np.ndarray, truth: np.ndarray, *,
         Geodesic solver.
     cache : GeodesicCache, optional
         Reuse geodesic rows across calls (its solver must be ``geodesic``);
-        e.g. the one given to :func:`meshcorr.evaluation.evaluate_map` for
+        e.g. the one given to :func:`meshcorr.evaluation.metrics.evaluate_map` for
         the same target.
     progress : callable or bool, optional
         ``progress("geodesic errors", done, total)`` as the single-source
@@ -124,7 +124,7 @@ def correspondence_figure(source, target, mapping, path, *, truth=None, error: b
         Geodesic rows to reuse for the errors (its solver must be ``geodesic``).
     progress : callable or bool, optional
         ``progress(stage, done, total)`` as the long work advances, or True
-        for a progress bar (:class:`meshcorr.progress.TqdmProgress`): the
+        for a progress bar (:class:`meshcorr.runtime.progress.TqdmProgress`): the
         stage "geodesic errors" (with ``truth``; ``done`` of ``total``
         single-source solves, which take minutes on meshes of tens of
         thousands of vertices), then "drawing" (``0`` then ``1`` of ``1``).
@@ -202,7 +202,7 @@ def affinity_eigenpairs(vertices, faces, k: int, *, geodesic: str = "heat",
     eigenvalues : (k,) float
         Descending.
     eigenvectors : (n, k) float
-        Unit columns, signs by :func:`meshcorr.embedding.sign_convention`.
+        Unit columns, signs by :func:`meshcorr.spectral.embedding.sign_convention`.
     """
     progress = as_progress(progress)
     mesh = as_mesh((vertices, faces), name="mesh", min_vertices=k + 2,
@@ -253,7 +253,7 @@ def spectrum_figure(vertices, faces, path, *, n_eigenvectors: int = 6, geodesic:
         Camera and resolution (see :func:`meshcorr.viz.render.render_panels`).
     progress : callable or bool, optional
         ``progress(stage, done, total)`` as the long work advances, or True
-        for a progress bar (:class:`meshcorr.progress.TqdmProgress`): the
+        for a progress bar (:class:`meshcorr.runtime.progress.TqdmProgress`): the
         stages "geodesics" (``done`` of ``n`` single-source solves: the
         ``n x n`` geodesic matrix, minutes on meshes of several thousand
         vertices), "eigenvectors" and "drawing" (``0`` then ``1`` of ``1``).

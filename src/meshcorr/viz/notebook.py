@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ParameterError
-from ..mesh import Mesh, MeshLike, as_mesh
+from ..core.mesh import Mesh, MeshLike, as_mesh
 
 __all__ = ["show", "require_plotly"]
 
@@ -69,7 +69,7 @@ def show(source: MeshLike, target: MeshLike, mapping, *, coloring: str = "parts"
     ParameterError
         Without plotly, or a map that does not fit the meshes.
     """
-    from ..transfer import check_map, pull_back
+    from ..maps.transfer import check_map, pull_back
     from .colors import UNMAPPED_COLOR, mesh_coloring
 
     go = require_plotly()

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._params import check_choice, check_float
+from ..runtime.checks import check_choice, check_float
 from ..errors import ParameterError
 from ..io import atomic_write
 from .colors import COLORMAPS
@@ -57,7 +57,7 @@ class Panel:
 
 
 def _require_matplotlib():
-    from ..plots import require_matplotlib
+    from .plots import require_matplotlib
 
     require_matplotlib()  # a clear ParameterError when matplotlib is missing
     from matplotlib.backends.backend_agg import FigureCanvasAgg

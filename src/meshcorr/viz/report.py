@@ -29,9 +29,9 @@ from importlib import resources
 
 import numpy as np
 
-from .._params import check_int
+from ..runtime.checks import check_int
 from ..io import atomic_write
-from ..transfer import check_map, pull_back
+from ..maps.transfer import check_map, pull_back
 from .colors import UNMAPPED_COLOR, mesh_coloring
 from .render import camera_frame
 
@@ -119,11 +119,11 @@ def report_html(source, target, mapping, summary: dict, *, errors=None, coloring
     mapping : (n1,) int
         Target vertex of each source vertex, -1 where unmapped.
     summary : dict
-        :meth:`meshcorr.result.Correspondence.summary` (``timings``,
+        :meth:`meshcorr.maps.result.Correspondence.summary` (``timings``,
         ``configuration``, ``runner_up``, ``params`` and counts are shown).
     errors : (p,) float, optional
         Normalised geodesic errors against ground truth (NaN: unmapped);
-        adds the cumulative error curve (:func:`meshcorr.evaluation.cumulative_curve`).
+        adds the cumulative error curve (:func:`meshcorr.evaluation.metrics.cumulative_curve`).
     coloring : {"parts", "xyz"}
         Colouring of the target; the source gets it through the map.
     title : str
@@ -137,7 +137,7 @@ def report_html(source, target, mapping, summary: dict, *, errors=None, coloring
     page : str
         A complete HTML document.
     """
-    from ..evaluation import cumulative_curve
+    from ..evaluation.metrics import cumulative_curve
 
     max_faces = check_int("max_faces", max_faces, minimum=1)
     (V1, F1), (V2, F2) = source, target

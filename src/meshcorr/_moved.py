@@ -1,0 +1,124 @@
+"""The import paths of the flat layout, kept working with a warning that names the new one.
+
+meshcorr kept its 58 modules side by side (``meshcorr.refine``,
+``meshcorr.landmark_map``, ...); they now live in subpackages by layer
+(``docs/architecture.md``). ``import meshcorr.refine`` and
+``from meshcorr.refine import zoomout`` still work: a finder on
+``sys.meta_path`` answers the old name with the module at its new place
+(the same module object, so patching either name patches both) and emits
+a :class:`DeprecationWarning` naming the new path. The public modules that
+``meshcorr`` itself lists (``meshcorr.datasets``, ``meshcorr.fmap``, ...)
+keep their short names without a warning.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.abc
+import importlib.util
+import sys
+import warnings
+
+#: Old module (under meshcorr) -> its place now.
+MOVED: dict[str, str] = {
+    "_params": "runtime.checks", "_threads": "runtime.threads", "_interrupt": "runtime.interrupt",
+    "timing": "runtime.timing", "memory": "runtime.memory", "off": "io.off",
+    "mesh": "core.mesh", "validate": "core.validate", "pointcloud": "core.pointcloud",
+    "laplacian": "core.laplacian", "geodesics": "core.geodesics", "landmarks": "core.sampling",
+    "normals": "core.normals", "boundary": "core.boundary", "holes": "core.holes",
+    "embedding": "spectral.embedding", "nystrom": "spectral.nystrom", "spectrum": "spectral.spectrum",
+    "modes": "spectral.modes",
+    "reorder": "stages.reorder", "tps": "stages.tps", "icp": "stages.icp", "anchors": "stages.anchors",
+    "refine": "stages.refine", "shells": "stages.shells", "bijection": "stages.bijection",
+    "landmark_map": "stages.landmarks",
+    "symmetry": "choice.symmetry", "selection": "choice.selection", "extremities": "choice.extremities",
+    "orientation": "choice.orientation", "curvature": "choice.curvature", "repair": "choice.repair",
+    "oriented_start": "choice.oriented_start",
+    "prepared": "shapes.prepared", "cache": "shapes.cache",
+    "partial": "pipeline.partial", "settings": "pipeline.settings", "matcher": "pipeline.matcher",
+    "methods": "pipeline.methods",
+    "result": "maps.result", "texture": "maps.texture",
+    "benchmark": "evaluation.benchmark", "ground_truth": "evaluation.ground_truth", "cuts": "evaluation.cuts",
+    "consistency": "collection.consistency", "plots": "viz.plots",
+}
+
+#: Public modules of ``meshcorr`` (its ``__all__``) -> their place; these short names stay, silently.
+PUBLIC_MODULES: dict[str, str] = {
+    "datasets": "evaluation.datasets", "evaluation": "evaluation", "fmap": "spectral.fmap",
+    "precise": "maps.precise", "progress": "runtime.progress", "transfer": "maps.transfer", "viz": "viz",
+}
+
+
+def new_name(old: str) -> str | None:
+    """``meshcorr.<new place>`` of a flat-layout module name ``meshcorr.<old>``, else None."""
+    parts = old.split(".")
+    if len(parts) != 2 or parts[0] != "meshcorr":
+        return None
+    short = parts[1]
+    place = MOVED.get(short) or (PUBLIC_MODULES.get(short) if PUBLIC_MODULES.get(short) != short else None)
+    return None if place is None else f"meshcorr.{place}"
+
+
+def _warn(old: str, new: str) -> None:
+    if old.split(".")[1] not in PUBLIC_MODULES:
+        warnings.warn(f"{old} moved to {new}; import {new} instead (the old path will be removed).",
+                      DeprecationWarning, stacklevel=3)
+
+
+class _Alias(importlib.abc.Loader):
+    """Loads an old module name as the module at its new place (the same object)."""
+
+    def __init__(self, new: str) -> None:
+        self.new = new
+
+    def create_module(self, spec):
+        _warn(spec.name, self.new)
+        module = importlib.import_module(self.new)
+        self.spec = module.__spec__  # the import system sets the alias's spec on the module; put it back
+        return module
+
+    def exec_module(self, module) -> None:  # already executed under its new name
+        module.__spec__ = self.spec
+
+
+class _OldPaths(importlib.abc.MetaPathFinder):
+    """Finds ``meshcorr.<old>`` for the modules of :data:`MOVED` and :data:`PUBLIC_MODULES`."""
+
+    def find_spec(self, fullname, path=None, target=None):
+        new = new_name(fullname)
+        if new is None:
+            return None
+        return importlib.util.spec_from_loader(fullname, _Alias(new))
+
+
+def moved_attribute(name: str):
+    """``meshcorr.<name>`` for an old module name (imports it with the warning), else None."""
+    if f"meshcorr.{name}" not in sys.modules and new_name(f"meshcorr.{name}") is None:
+        return None
+    return importlib.import_module(f"meshcorr.{name}")
+
+
+def install() -> None:
+    """Put the finder of old paths on ``sys.meta_path`` once."""
+    if not any(isinstance(finder, _OldPaths) for finder in sys.meta_path):
+        sys.meta_path.append(_OldPaths())
+
+
+def forwarding(package: str, module: str):
+    """A module ``__getattr__`` for ``package`` that looks names up in ``package.module`` (imported on first use).
+
+    A subpackage that took the place of a flat-layout module of the same
+    name (``meshcorr.pipeline``, ``meshcorr.evaluation``,
+    ``meshcorr.collection``) keeps that module's names this way.
+    """
+    def __getattr__(name: str):
+        if name.startswith("__"):
+            raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        target = importlib.import_module(f"{package}.{module}")
+        if hasattr(target, name):
+            return getattr(target, name)
+        if importlib.util.find_spec(f"{package}.{name}") is not None:  # a submodule not imported yet
+            return importlib.import_module(f"{package}.{name}")
+        raise AttributeError(f"module {package!r} has no attribute {name!r}")
+
+    return __getattr__

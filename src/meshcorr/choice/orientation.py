@@ -2,8 +2,8 @@
 
 An intrinsic symmetry (left/right of a person or an animal) is an isometry
 that *reverses* orientation, so a map and its mirror image cost the same to
-every intrinsic criterion, the spectral cost included (ALGORITHM.md,
-"Pitfalls"). Orientation tells them apart: with both meshes oriented
+every intrinsic criterion, the spectral cost included (docs/method.md,
+"Departures from the paper", the left/right mirror). Orientation tells them apart: with both meshes oriented
 outwards, a correct map takes a small counter-clockwise loop around a
 source vertex to a counter-clockwise loop around its image, a mirrored map
 to a clockwise one.

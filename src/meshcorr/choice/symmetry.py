@@ -2,7 +2,7 @@
 
 On a shape with an intrinsic (left/right) symmetry, the eigenvector sign
 configuration of the true map and that of its mirror image cost nearly the
-same (ALGORITHM.md, "Pitfalls": the lowest-cost configuration was the
+same (docs/method.md, "Departures from the paper": the lowest-cost configuration was the
 mirror in 7 of 10 TOSCA and Sumner pairs). A low-dimensional embedding also
 confuses the front and the back of thin shapes (a person's chest and
 back), which is not an isometry. Two measures on each candidate's map tell

@@ -1,6 +1,6 @@
 """The spectral correspondence pipeline of Jain & Zhang (2006), top to bottom.
 
-``match(source, target)`` runs ALGORITHM.md steps 1-7:
+``match(source, target)`` runs the steps 1-7 of docs/method.md:
 
 1. all-pairs geodesic distances on each mesh;
 2. Gaussian affinities, sigma = the largest geodesic distance;
@@ -173,7 +173,7 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *,
         scale (its geodesics times mean embedding distance / (h x mean
         normalised geodesic distance)), so it is commensurate with the
         embedding term; "geodesic": geodesics divided by the largest one,
-        as in ALGORITHM.md step 6.
+        as the paper does (docs/method.md, step 6).
     landmarks : sequence of (source_index, target_index), optional
         Vertices the user knows to correspond (0-based, input numbering).
         They start a candidate map of their own, decide among the candidate
@@ -600,7 +600,7 @@ def _finish(candidate: Candidate, X: np.ndarray, spectra, spread: float, *, n_an
     With ``anchor_scale="embedding"`` the normalised geodesic term is put in
     the embedding's length scale: multiplied by the mean distance between
     embedded points over ``h`` times the mean normalised geodesic distance
-    to the anchors (ALGORITHM.md, "Pitfalls": geodesics in [0, 1] summed over
+    to the anchors (docs/method.md, "Choices where the paper is silent": geodesics in [0, 1] summed over
     three anchors dwarf embedding distances of ~0.1-0.3). ``spread`` is that mean
     distance, :func:`meshcorr.stages.tps.mean_pairwise_distance` of ``X``.
     """

@@ -1,7 +1,7 @@
 """Prepare a shape once, match it many times: :class:`PreparedShape` and :func:`prepare`.
 
 Most of the time of a pair goes into work that depends on one mesh only:
-its geodesic rows and spectral embedding (ALGORITHM.md steps 1-3), the
+its geodesic rows and spectral embedding (docs/method.md, steps 1-3), the
 outward orientation and the curvature field that score candidate maps
 (:mod:`meshcorr.choice.orientation`, :mod:`meshcorr.choice.curvature`), and the
 Laplace-Beltrami basis of the refinement (:mod:`meshcorr.stages.refine`).

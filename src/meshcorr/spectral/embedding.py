@@ -1,4 +1,4 @@
-"""Gaussian affinities and the spectral embedding (ALGORITHM.md steps 2-3).
+"""Gaussian affinities and the spectral embedding (docs/method.md, steps 2-3).
 
 .. math::
 

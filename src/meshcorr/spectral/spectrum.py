@@ -3,7 +3,7 @@
 A :class:`Spectrum` bundles the spectral embedding of a mesh with access to
 its (normalised) geodesic distances. The dense builder here computes
 all-pairs geodesics and the exact top-k eigenpairs of the full affinity
-matrix (ALGORITHM.md steps 1-3); other builders (e.g. a landmark-based one
+matrix (docs/method.md, steps 1-3); other builders (e.g. a landmark-based one
 for large meshes) only need to return the same object.
 """
 

@@ -1,4 +1,4 @@
-"""Anchor selection and proximity-aided matching (ALGORITHM.md steps 6-7).
+"""Anchor selection and proximity-aided matching (docs/method.md, steps 6-7).
 
 With the aligned embeddings, :math:`Z_{ij} = \\lVert X_i - Y_j \\rVert`. The
 first anchor pair is :math:`\\arg\\min Z`; before each further one, ``Z`` is

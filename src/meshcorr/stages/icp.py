@@ -1,4 +1,4 @@
-"""Non-rigid ICP with thin-plate splines in the spectral domain (ALGORITHM.md step 5).
+"""Non-rigid ICP with thin-plate splines in the spectral domain (docs/method.md, step 5).
 
 Each iteration (a) matches every source point to its nearest warped target
 point, (b) fits a thin-plate spline taking the matched original target
@@ -6,8 +6,8 @@ points onto their source partners, (c) warps the whole target embedding,
 (d) lowers the regulariser: :math:`\\lambda_{t+1} = \\rho \\lambda_t`, with
 :math:`\\lambda_0` the mean distance between all pairs of embedded points.
 
-Two pitfalls of a literal implementation are avoided (ALGORITHM.md,
-"Pitfalls"): control pairs keep one pair per target point (several source
+Two pitfalls of a literal implementation are avoided (docs/method.md,
+"Choices where the paper is silent"): control pairs keep one pair per target point (several source
 points hitting one target point make the spline system singular as
 :math:`\\lambda` shrinks), and the control subset of source points is drawn
 once, so "the correspondence stops changing" can actually happen.

@@ -1,4 +1,4 @@
-"""Eigenvector reordering and sign correction (ALGORITHM.md step 4).
+"""Eigenvector reordering and sign correction (docs/method.md, step 4).
 
 Eigenvectors of two shapes agree only up to sign, and close eigenvalues can
 swap order. The source embedding ``X`` stays fixed; a *configuration*

@@ -1,4 +1,4 @@
-"""Thin-plate splines in k dimensions (ALGORITHM.md appendix).
+"""Thin-plate splines in k dimensions (docs/method.md, step 5).
 
 .. math::
 

@@ -105,11 +105,11 @@ def test_mapped_curvature_is_smoothed_curvature_bit_for_bit_from_a_cached_table(
     for signed in (True, False):
         np.testing.assert_array_equal(mapped_curvature(mesh, vertices, 0.045, signed=signed),
                                       smoothed_curvature(mesh, vertices, 0.045, signed=signed))
-    table = mesh._cache[("curvature_table", 0.045)]
+    table = mesh.store[("curvature_table", 0.045)]
     assert table.shape == (mesh.n_vertices,) and not table.flags.writeable
-    assert ("curvature_table", 0.045, "unsigned") in mesh._cache
+    assert ("curvature_table", 0.045, "unsigned") in mesh.store
     # Above the size limit: no table, the same values.
     other = Mesh(shape.vertices, shape.faces)
     monkeypatch.setattr(curvature, "CURVATURE_TABLE_MAX", 10)
     np.testing.assert_array_equal(mapped_curvature(other, vertices, 0.045), smoothed_curvature(other, vertices, 0.045))
-    assert not any(key[0] == "curvature_table" for key in other._cache)
+    assert not any(key[0] == "curvature_table" for key in other.store)

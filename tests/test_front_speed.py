@@ -35,7 +35,7 @@ def test_unseeded_orientation_sample_is_not_cached(creature_pair):
     (V1, F1), _ = creature_pair
     mesh = Mesh(V1, F1)
     orientation_score(mesh, mesh, np.arange(len(V1)), n_sample=20, random_state=None)
-    assert not any(key[0] == "orientation_neighbourhoods" for key in mesh._cache)
+    assert not any(key[0] == "orientation_neighbourhoods" for key in mesh.store)
 
 
 def test_signed_volumes_equal_the_direct_sum_from_each_origin(creature_pair):
@@ -88,9 +88,9 @@ def test_orientation_scores_equal_the_two_scores_and_cache_the_regions(creature_
         assert score == orientation_score(Mesh(V1, F1), Mesh(V2, F2), mapping, random_state=3)
         np.testing.assert_array_equal(regional, regional_orientation(Mesh(V1, F1), Mesh(V2, F2), mapping,
                                                                      random_state=3))
-    assert any(key[0] == "orientation_regions" for key in source._cache)
+    assert any(key[0] == "orientation_regions" for key in source.store)
     with pytest.raises(Exception, match="one entry per source vertex"):
         orientation_scores(source, target, np.arange(3))
     unseeded = Mesh(V1, F1)
     orientation_scores(unseeded, unseeded, np.arange(len(V1)), random_state=None)
-    assert not any(key[0] == "orientation_regions" for key in unseeded._cache)
+    assert not any(key[0] == "orientation_regions" for key in unseeded.store)

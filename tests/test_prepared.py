@@ -163,7 +163,7 @@ def test_prepared_shape_carries_the_per_pair_quantities_through_its_file(pair, t
 
     shapes = [prepare(mesh, mode="scalable") for mesh in pair]
     for shape in shapes:
-        kinds = {key[0] for key in shape.mesh._cache}
+        kinds = {key[0] for key in shape.mesh.store}
         assert {"curvature_table", "orientation_regions"} <= kinds
         assert set(map(int, distortion_sources(shape.n_vertices, 0))) <= set(shape.spectrum.rows)
         assert ("extremities", 0) in shape.spectrum.memo and "spread" in shape.spectrum.memo
@@ -173,7 +173,7 @@ def test_prepared_shape_carries_the_per_pair_quantities_through_its_file(pair, t
     loaded = [PreparedShape.load(tmp_path / f"{name}.npz", mesh=mesh) for name, mesh in zip("ab", pair)]
     for shape, original in zip(loaded, shapes):
         key = ("curvature_table", 0.045)
-        np.testing.assert_array_equal(shape.mesh._cache[key], original.mesh._cache[key])
+        np.testing.assert_array_equal(shape.mesh.store[key], original.mesh.store[key])
         assert set(original.spectrum.rows) <= set(shape.spectrum.rows)
         assert not shape.spectrum.memo  # recomputed on demand: the same tips
         tips, before = spectrum_extremities(shape.mesh, shape.spectrum), original.spectrum.memo[("extremities", 0)]

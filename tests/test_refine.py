@@ -208,7 +208,7 @@ def test_prefetched_bases_are_the_ones_computed_directly(poses):
     assert prefetch.seconds is not None and prefetch.seconds > 0
     for mesh, cached in zip(poses, fresh):
         direct = laplace_basis(Mesh(mesh.vertices, mesh.faces), 12, random_state=3)
-        prefetched = cached._cache[("laplace_basis", 12, 3)]
+        prefetched = cached.store[("laplace_basis", 12, 3)]
         np.testing.assert_array_equal(prefetched[0], direct[0])
         np.testing.assert_array_equal(prefetched[1], direct[1])
 
@@ -251,7 +251,7 @@ def test_prefetch_reraises_the_worker_error_and_cancels_the_worker_after_an_erro
             raise RuntimeError("stage failed")
     assert prefetch._done.is_set()  # leaving the block waited for the worker
     assert len(solves) == 3  # the solve after the cancel request stopped it
-    assert not any(key[0] == "laplace_basis" for mesh in fresh for key in mesh._cache)
+    assert not any(key[0] == "laplace_basis" for mesh in fresh for key in mesh.store)
 
 
 def test_match_reports_the_background_basis_time(poses):

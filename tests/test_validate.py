@@ -353,3 +353,14 @@ def test_ragged_vertex_list_through_match_raises_a_mesh_error():
 def test_coordinates_that_are_not_real_numbers(vertices):
     with pytest.raises(MeshError, match=f"vertex coordinates must be real numbers; got dtype {vertices.dtype}"):
         validate_mesh(vertices, TET_F)
+
+
+def test_shape_store_computes_each_key_once_and_keeps_it():
+    from meshcorr.core.store import ShapeStore
+
+    store, calls = ShapeStore(), []
+    assert store.get(("double", 2), lambda: calls.append(1) or 4) == 4
+    assert store.get(("double", 2), lambda: calls.append(1) or -1) == 4  # kept, not recomputed
+    assert calls == [1] and ("double", 2) in store and ("double", 3) not in store
+    store.put(("double", 3), 6)
+    assert store[("double", 3)] == 6 and len(store) == 2 and sorted(store) == [("double", 2), ("double", 3)]

@@ -86,7 +86,7 @@ def _curvature_field(mesh: Mesh, signed: bool = True) -> tuple[np.ndarray, np.nd
     """Clipped curvature (its absolute value unless ``signed``), vertex areas, a KD-tree of the
     vertices and sqrt(area), cached on the mesh."""
     key = ("curvature_field",) if signed else ("curvature_field", "unsigned")
-    if key not in mesh._cache:
+    if key not in mesh.store:
         H, mass = signed_mean_curvature(mesh)
         # On a boundary the Laplacian of the coordinates is one-sided, not a curvature: those
         # vertices get no weight in the ball averages (a ball of boundary vertices only keeps them).
@@ -94,8 +94,8 @@ def _curvature_field(mesh: Mesh, signed: bool = True) -> tuple[np.ndarray, np.nd
         interior = mass > 0
         H = H if signed else np.abs(H)
         H = np.clip(H, *np.percentile(H[interior] if interior.any() else H, [1.0, 99.0]))
-        mesh._cache[key] = (H, mass, cKDTree(np.asarray(mesh.vertices, dtype=float)), float(np.sqrt(mass.sum())))
-    return mesh._cache[key]
+        mesh.store.put(key, (H, mass, cKDTree(np.asarray(mesh.vertices, dtype=float)), float(np.sqrt(mass.sum()))))
+    return mesh.store[key]
 
 
 def _on_boundary(mesh: Mesh) -> np.ndarray:
@@ -170,11 +170,11 @@ def mapped_curvature(mesh: Mesh, vertices: np.ndarray, radius: float, *, signed:
     if mesh.n_vertices > CURVATURE_TABLE_MAX:
         return smoothed_curvature(mesh, vertices, radius, signed=signed)
     key = ("curvature_table", float(radius)) + (() if signed else ("unsigned",))
-    if key not in mesh._cache:
+    if key not in mesh.store:
         table = smoothed_curvature(mesh, np.arange(mesh.n_vertices), radius, signed=signed)
         table.flags.writeable = False
-        mesh._cache[key] = table
-    return mesh._cache[key][vertices]
+        mesh.store.put(key, table)
+    return mesh.store[key][vertices]
 
 
 def curvature_disagreement(source: Mesh, target: Mesh, mapping: np.ndarray, *,
@@ -236,21 +236,21 @@ def curvature_disagreement(source: Mesh, target: Mesh, mapping: np.ndarray, *,
 def _area_sample(mesh: Mesh, n: int, random_state: int | None) -> np.ndarray:
     """``n`` vertices drawn with probability proportional to their area (all if fewer), cached."""
     key = ("area_sample", n, random_state)
-    if key not in mesh._cache:
+    if key not in mesh.store:
         _, mass = oriented_normals(mesh)
         if mesh.n_vertices <= n:
-            mesh._cache[key] = np.arange(mesh.n_vertices)
+            mesh.store.put(key, np.arange(mesh.n_vertices))
         else:
             rng = np.random.default_rng(random_state)
-            mesh._cache[key] = np.sort(rng.choice(mesh.n_vertices, size=n, replace=False, p=mass / mass.sum()))
-    return mesh._cache[key]
+            mesh.store.put(key, np.sort(rng.choice(mesh.n_vertices, size=n, replace=False, p=mass / mass.sum())))
+    return mesh.store[key]
 
 
 def _sample_curvature(mesh: Mesh, n: int, random_state: int | None, radius: float, signed: bool = True
                       ) -> tuple[np.ndarray, float, float]:
     """:func:`smoothed_curvature` on the mesh's :func:`_area_sample`, its mean and standard deviation; cached."""
     key = ("sample_curvature", n, random_state, float(radius)) + (() if signed else ("unsigned",))
-    if key not in mesh._cache:
+    if key not in mesh.store:
         values = smoothed_curvature(mesh, _area_sample(mesh, n, random_state), radius, signed=signed)
-        mesh._cache[key] = (values, float(values.mean()), float(values.std()) or 1.0)
-    return mesh._cache[key]
+        mesh.store.put(key, (values, float(values.mean()), float(values.std()) or 1.0))
+    return mesh.store[key]

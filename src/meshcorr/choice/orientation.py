@@ -199,13 +199,13 @@ def mesh_orientation(mesh: Mesh) -> Orientation:
     (:func:`cloud_normals`).
     """
     key = ("orientation",)
-    if key not in mesh._cache:
+    if key not in mesh.store:
         if mesh.is_cloud:
             estimate = cloud_normals(mesh)
-            mesh._cache[key] = Orientation(mesh.faces, estimate.reliable, estimate.reason, 0)
+            mesh.store.put(key, Orientation(mesh.faces, estimate.reliable, estimate.reason, 0))
         else:
-            mesh._cache[key] = orient_outward(mesh.vertices, mesh.faces)
-    return mesh._cache[key]
+            mesh.store.put(key, orient_outward(mesh.vertices, mesh.faces))
+    return mesh.store[key]
 
 
 def cloud_normals(mesh: Mesh):
@@ -214,9 +214,9 @@ def cloud_normals(mesh: Mesh):
     from ..core.normals import estimate_normals
 
     key = ("cloud_normals",)
-    if key not in mesh._cache:
-        mesh._cache[key] = estimate_normals(mesh.vertices, vertex_areas(mesh))
-    return mesh._cache[key]
+    if key not in mesh.store:
+        mesh.store.put(key, estimate_normals(mesh.vertices, vertex_areas(mesh)))
+    return mesh.store[key]
 
 
 def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -262,7 +262,7 @@ def oriented_normals(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
     between the same two shapes.
     """
     key = ("oriented_vertex_normals",)
-    if key not in mesh._cache:
+    if key not in mesh.store:
         if mesh.is_cloud:
             from ..core.laplacian import vertex_areas
 
@@ -270,8 +270,8 @@ def oriented_normals(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
         else:
             normals, areas = vertex_normals(mesh.vertices, mesh_orientation(mesh).faces)
         normals.flags.writeable = areas.flags.writeable = False
-        mesh._cache[key] = normals, areas
-    return mesh._cache[key]
+        mesh.store.put(key, (normals, areas))
+    return mesh.store[key]
 
 
 def _neighbourhoods(source: Mesh, n_neighbors: int, n_sample: int, random_state) -> tuple:
@@ -284,7 +284,7 @@ def _neighbourhoods(source: Mesh, n_neighbors: int, n_sample: int, random_state)
     # Only a seeded sample is the same every time (random_state=None draws anew).
     seeded = isinstance(random_state, (int, np.integer))
     key = ("orientation_neighbourhoods", n_neighbors, n_sample, int(random_state) if seeded else None)
-    if not seeded or key not in source._cache:
+    if not seeded or key not in source.store:
         X = source.vertices
         src_normals, src_areas = oriented_normals(source)
         rng = np.random.default_rng(random_state)
@@ -301,8 +301,8 @@ def _neighbourhoods(source: Mesh, n_neighbors: int, n_sample: int, random_state)
             array.flags.writeable = False
         if not seeded:
             return parts
-        source._cache[key] = parts
-    return source._cache[key]
+        source.store.put(key, parts)
+    return source.store[key]
 
 
 def orientation_score(source: Mesh, target: Mesh, mapping: np.ndarray, *, n_neighbors: int = 16,
@@ -468,8 +468,8 @@ def _regions(source: Mesh, n_regions: int, n_neighbors: int, n_sample: int, rand
     """
     seeded = isinstance(random_state, (int, np.integer))
     key = ("orientation_regions", n_regions, n_neighbors, n_sample, int(random_state) if seeded else None)
-    if seeded and key in source._cache:
-        return source._cache[key]
+    if seeded and key in source.store:
+        return source.store[key]
     sample = _neighbourhoods(source, n_neighbors, n_sample, random_state)[0]
     points = source.vertices[sample]
     seeds = farthest_point_sampling(lambda i: np.linalg.norm(points - points[i], axis=1), len(points),
@@ -478,7 +478,7 @@ def _regions(source: Mesh, n_regions: int, n_neighbors: int, n_sample: int, rand
     region.flags.writeable = False
     parts = (region, int(len(seeds)))
     if seeded:
-        source._cache[key] = parts
+        source.store.put(key, parts)
     return parts
 
 

@@ -96,12 +96,12 @@ def _basis_gradients(mesh: Mesh, basis: np.ndarray) -> tuple:
     face weights ``(m, k)`` (face area times the basis averaged on the face).
     """
     key = ("orientation_operator_basis", basis.shape, hash(basis[::max(1, len(basis) // 64)].tobytes()))
-    if key not in mesh._cache:
+    if key not in mesh.store:
         faces = mesh_orientation(mesh).faces
         vertices = np.asarray(mesh.vertices) / np.sqrt(mesh.area)
         gradients, normal, area = _face_gradients(vertices, faces, basis)
-        mesh._cache[key] = (faces, vertices, gradients, normal, area[:, None] * basis[faces].mean(axis=1))
-    return mesh._cache[key]
+        mesh.store.put(key, (faces, vertices, gradients, normal, area[:, None] * basis[faces].mean(axis=1)))
+    return mesh.store[key]
 
 
 def orientation_operators(mesh: Mesh, basis: np.ndarray, functions: np.ndarray) -> np.ndarray:

@@ -97,7 +97,7 @@ class Boundary:
 def mesh_boundary(mesh: Mesh) -> Boundary:
     """The :class:`Boundary` of ``mesh``, cached on it (the mesh is immutable)."""
     key = ("boundary",)
-    if key not in mesh._cache:
+    if key not in mesh.store:
         edges = boundary_edges(mesh.faces, mesh.n_vertices)
         if len(edges) == 0:
             loop, lengths = np.zeros(0, dtype=np.int64), np.zeros(0)
@@ -115,8 +115,8 @@ def mesh_boundary(mesh: Mesh) -> Boundary:
             loop, lengths = rank[loop], lengths[order]
         for array in (edges, loop, lengths):
             array.flags.writeable = False
-        mesh._cache[key] = Boundary(edges, loop, lengths, mesh.area)
-    return mesh._cache[key]
+        mesh.store.put(key, Boundary(edges, loop, lengths, mesh.area))
+    return mesh.store[key]
 
 
 def boundary_distance(mesh: Mesh) -> np.ndarray:
@@ -125,7 +125,7 @@ def boundary_distance(mesh: Mesh) -> np.ndarray:
     ``inf`` everywhere on a closed mesh.
     """
     key = ("boundary_distance",)
-    if key not in mesh._cache:
+    if key not in mesh.store:
         boundary = mesh_boundary(mesh).vertices
         if len(boundary) == 0:
             distance = np.full(mesh.n_vertices, np.inf)
@@ -136,5 +136,5 @@ def boundary_distance(mesh: Mesh) -> np.ndarray:
             distance = np.maximum(np.asarray(solver.compute_distance_multisource(boundary.tolist())), 0.0)
             distance[boundary] = 0.0
         distance.flags.writeable = False
-        mesh._cache[key] = distance
-    return mesh._cache[key]
+        mesh.store.put(key, distance)
+    return mesh.store[key]

@@ -55,7 +55,7 @@ def laplacian(mesh) -> tuple[sp.csc_matrix, np.ndarray]:
         Lumped vertex areas, in the mesh's units squared (not normalised).
     """
     key = ("laplacian",)
-    if key not in mesh._cache:
+    if key not in mesh.store:
         V = np.asarray(mesh.vertices, dtype=np.float64)
         if mesh.is_cloud:
             import robust_laplacian
@@ -73,8 +73,8 @@ def laplacian(mesh) -> tuple[sp.csc_matrix, np.ndarray]:
             L, mass = pp3d.cotan_laplacian(V, F), pp3d.vertex_areas(V, F)
         mass = np.array(mass, dtype=np.float64)
         mass.flags.writeable = False
-        mesh._cache[key] = (sp.csc_matrix(L), mass)
-    return mesh._cache[key]
+        mesh.store.put(key, (sp.csc_matrix(L), mass))
+    return mesh.store[key]
 
 
 def vertex_areas(mesh) -> np.ndarray:

@@ -17,6 +17,7 @@ import numpy as np
 from ..errors import MeshError
 from .geodesics import ProgressFn, pairwise_geodesics
 from .pointcloud import validate_cloud
+from .store import ShapeStore
 from .validate import _check_vertex_count, _select_component, validate_mesh
 
 
@@ -69,7 +70,8 @@ class Mesh:
         for array in (self.vertices, self.faces, self.kept):
             array.flags.writeable = False
         self.name = name
-        self._cache: dict[tuple, Any] = {}
+        #: Quantities derived from this shape alone, keyed by what produced them (meshcorr.core.store).
+        self.store = ShapeStore()
 
     @property
     def n_vertices(self) -> int:
@@ -99,11 +101,11 @@ class Mesh:
     def geodesic_matrix(self, method: str = "heat", progress: ProgressFn | None = None) -> np.ndarray:
         """All-pairs geodesic distances ``(n, n)``, cached per solver, read-only."""
         key = ("geodesic_matrix", method)
-        if key not in self._cache:
+        if key not in self.store:
             D = pairwise_geodesics(self.vertices, self.faces, method, progress=progress)
             D.flags.writeable = False
-            self._cache[key] = D
-        return self._cache[key]
+            self.store.put(key, D)
+        return self.store[key]
 
     def __repr__(self) -> str:
         if self.is_cloud:
@@ -143,13 +145,13 @@ def as_mesh(obj: MeshLike, *, name: str | None = None, largest_component: bool =
     if isinstance(obj, Mesh):
         if obj.n_vertices < min_vertices:
             raise MeshError(f"{obj.name} has {obj.n_vertices} vertices; at least {min_vertices} are needed. {reason}")
-        if obj.is_cloud or obj.n_caps or ("connected",) in obj._cache:
+        if obj.is_cloud or obj.n_caps or ("connected",) in obj.store:
             return obj
         # A Mesh made directly, not by as_mesh: its components are checked as any input's (this raises
         # without largest_component).
         vertices, faces, kept = _select_component(obj.vertices, obj.faces, largest_component, obj.name)
         if len(kept) == obj.n_vertices:
-            obj._cache[("connected",)] = True
+            obj.store.put(("connected",), True)
             return obj
         _check_vertex_count(len(kept), min_vertices, obj.name, reason)
         return Mesh(vertices, faces, name=obj.name, kept=obj.kept[kept], n_original=obj.n_original)

@@ -36,7 +36,9 @@ def _light_copy(mesh: Mesh | None) -> Mesh | None:
         return None
     copy = Mesh(mesh.vertices, mesh.faces, name=mesh.name, kept=mesh.kept, n_original=mesh.n_original,
                 n_caps=mesh.n_caps)
-    copy._cache.update({key: value for key, value in mesh._cache.items() if key[0] == "laplace_basis"})
+    for key, value in mesh.store.items():
+        if key[0] == "laplace_basis":
+            copy.store.put(key, value)
     return copy
 
 

@@ -269,9 +269,9 @@ def geodesic_rows(mesh: Mesh, geodesic: str = "heat") -> RowFn:
     from ..spectral.nystrom import sampled_rows
 
     key = ("geodesic_rows", geodesic)
-    if key not in mesh._cache:
-        mesh._cache[key] = sampled_rows(mesh, geodesic, {}, 1.0)
-    return mesh._cache[key]
+    if key not in mesh.store:
+        mesh.store.put(key, sampled_rows(mesh, geodesic, {}, 1.0))
+    return mesh.store[key]
 
 
 def geodesic_diameter(rows: RowFn, n_vertices: int, *, random_state: int | None = 0) -> float:
@@ -526,14 +526,14 @@ def fitted_distortion(part_rows: RowFn, whole_rows: RowFn, mapping: np.ndarray, 
 def _edge_graph(mesh: Mesh) -> sp.csr_matrix:
     """Edge lengths of ``mesh`` as a symmetric sparse matrix, cached."""
     key = ("edge_graph",)
-    if key not in mesh._cache:
+    if key not in mesh.store:
         f = mesh.faces
         e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
         lengths = np.linalg.norm(mesh.vertices[e[:, 0]] - mesh.vertices[e[:, 1]], axis=1)
         n = mesh.n_vertices
         graph = sp.coo_matrix((lengths, (e[:, 0], e[:, 1])), shape=(n, n)).tocsr()
-        mesh._cache[key] = graph.maximum(graph.T).tocsr()
-    return mesh._cache[key]
+        mesh.store.put(key, graph.maximum(graph.T).tocsr())
+    return mesh.store[key]
 
 
 def mean_edge_length(mesh: Mesh) -> float:

@@ -13,7 +13,7 @@ place of a mesh: the map is the same, bit for bit, as from the meshes.
 Where the data lives
     The spectrum (:class:`meshcorr.spectral.spectrum.Spectrum`) is held by the
     prepared shape; everything else is the mesh's own cache
-    (``Mesh._cache``: ``key tuple -> value``, filled by the cached functions
+    (``Mesh.store``, :mod:`meshcorr.core.store`: ``key tuple -> value``, filled by the cached functions
     of the pipeline, which look there before they compute). A new per-shape
     quantity computed through such a cached function is carried, saved and
     loaded without any change here; :func:`warm` is where :func:`prepare`
@@ -175,7 +175,7 @@ class PreparedShape:
         arrays["spectrum.rows"] = (np.stack([rows[int(i)] for i in vertices]) if len(vertices)
                                    else np.zeros((0, self.n_vertices)))
         # Values of a type _encode has no rule for are left out: they are recomputed when needed.
-        entries = [[list(key), spec] for key, value in list(self.mesh._cache.items())
+        entries = [[list(key), spec] for key, value in list(self.mesh.store.items())
                    if (spec := _encode(value, arrays)) is not _SKIP and not _contains(spec, _SKIP)]
         header = dict(format=FORMAT_VERSION, meshcorr=_version(), settings=self.settings,
                       mesh_sha256=self.digest, name=self.mesh.name, n_original=self.mesh.n_original,
@@ -240,7 +240,7 @@ class PreparedShape:
                                      f"{'a point cloud' if header.get('cloud') else 'a mesh'} but holds "
                                      f"{len(mesh.faces)} faces: the file is damaged. Prepare the shape again.")
         for key, spec in header["entries"]:
-            mesh._cache[tuple(key)] = _decode(spec, arrays)
+            mesh.store.put(tuple(key), _decode(spec, arrays))
         settings = dict(header["settings"])
         sigma = float(header["max_geodesic"])
         if settings["mode"] == "dense":

@@ -111,7 +111,7 @@ def _laplace_basis(mesh: Mesh, k: int, random_state: int | None,
     n = mesh.n_vertices
     k = check_int("refine_k", k, minimum=2, maximum=max(2, n - 1))
     key = ("laplace_basis", k, random_state)
-    if key not in mesh._cache:
+    if key not in mesh.store:
         L, mass = laplacian(mesh)  # cotangent Laplacian, or a point cloud's (meshcorr.core.laplacian)
         # Unit total area: bases of meshes of different sizes are then comparable
         # (an orthogonal functional map cannot absorb a scale factor).
@@ -137,8 +137,8 @@ def _laplace_basis(mesh: Mesh, k: int, random_state: int | None,
         order = np.argsort(values)
         values, vectors = values[order], sign_convention(vectors[:, order])
         vectors.flags.writeable = False
-        mesh._cache[key] = (values, vectors)
-    return mesh._cache[key]
+        mesh.store.put(key, (values, vectors))
+    return mesh.store[key]
 
 
 #: Squared distances per block of :func:`_nearest_rows` (8 MB of float64).

@@ -11,7 +11,7 @@ import sys
 
 import numpy as np
 import pytest
-from test_cli import pair  # noqa: F401 - the tube pair fixture (source.off, target.ply)
+from .test_cli import pair  # noqa: F401 - the tube pair fixture (source.off, target.ply)
 
 from meshcorr.cli import EXIT_INPUT, EXIT_USAGE, main
 

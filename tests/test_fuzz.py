@@ -12,7 +12,7 @@ pytest.importorskip("hypothesis")
 
 from hypothesis import HealthCheck, given, settings  # noqa: E402
 
-import fuzzing  # noqa: E402
+from . import fuzzing  # noqa: E402
 
 BOUNDED = settings(max_examples=1000, deadline=5000, derandomize=True, database=None,
                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])

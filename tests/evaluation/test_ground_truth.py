@@ -1,0 +1,72 @@
+"""meshcorr.evaluation.ground_truth: the identity, .vts pairs and files of vertex pairs, with their refusals."""
+
+import numpy as np
+import pytest
+
+from meshcorr.errors import InputError
+from meshcorr.evaluation.ground_truth import GroundTruth, identity_truth, load_ground_truth, read_pairs, read_vts
+
+
+def test_identity():
+    truth = identity_truth(4, 4)
+    assert len(truth) == 4 and truth.description == "identity"
+    np.testing.assert_array_equal(truth.source, truth.target)
+    with pytest.raises(InputError, match="needs meshes with equal vertex counts; the source has 4 and the target 5"):
+        identity_truth(4, 5)
+    assert load_ground_truth("identity", n_source=3, n_target=3).source.tolist() == [0, 1, 2]
+
+
+def test_ground_truth_arrays_and_check():
+    truth = GroundTruth([0, 2], [1, 1], "pairs.txt")
+    with pytest.raises(ValueError):
+        truth.source[0] = 5
+    assert truth.check(3, 2) is truth
+    with pytest.raises(InputError, match=r"pair 0 names target vertex 1, but the target mesh has 1 vertices .* "
+                                         r"in pairs\.txt"):
+        truth.check(3, 1)
+    with pytest.raises(InputError, match="as many source as target vertices; got 2 and 1"):
+        GroundTruth([0, 1], [0])
+
+
+def test_vts_are_one_based(tmp_path):
+    (tmp_path / "a.vts").write_text("1\n3\n2\n")
+    (tmp_path / "b.vts").write_text("2\n2\n1\n")
+    np.testing.assert_array_equal(read_vts(tmp_path / "a.vts"), [0, 2, 1])
+    truth = load_ground_truth([tmp_path / "a.vts", tmp_path / "b.vts"], n_source=3, n_target=2)
+    np.testing.assert_array_equal(truth.source, [0, 2, 1])
+    np.testing.assert_array_equal(truth.target, [1, 1, 0])
+    assert truth.description == "a.vts + b.vts"
+    with pytest.raises(InputError, match=r"holds index 3 \(1-based\), but its mesh has 2 vertices"):
+        read_vts(tmp_path / "a.vts", 2)
+    (tmp_path / "zero.vts").write_text("0\n1\n")
+    with pytest.raises(InputError, match="holds index 0, but .vts indices are 1-based"):
+        read_vts(tmp_path / "zero.vts")
+    (tmp_path / "text.vts").write_text("1\nx\n")
+    with pytest.raises(InputError, match=r"text\.vts, line 2: a \.vts file holds one integer per line"):
+        read_vts(tmp_path / "text.vts")
+
+
+def test_pairs_and_dense_maps(tmp_path):
+    (tmp_path / "pairs.txt").write_text("0 4\n2,1\n3:0\n")
+    truth = read_pairs(tmp_path / "pairs.txt")
+    assert truth.source.tolist() == [0, 2, 3] and truth.target.tolist() == [4, 1, 0]
+    (tmp_path / "dense.txt").write_text("2\n-1\n0\n")
+    truth = read_pairs(tmp_path / "dense.txt", n_source=3)
+    assert truth.source.tolist() == [0, 2] and truth.target.tolist() == [2, 0]  # -1 skipped
+    with pytest.raises(InputError, match="has 3 lines of one index each .* the source mesh has 4 vertices"):
+        read_pairs(tmp_path / "dense.txt", n_source=4)
+    (tmp_path / "mixed.txt").write_text("0 1\n2\n")
+    with pytest.raises(InputError, match=r"line 2: mixes one- and two-column lines"):
+        read_pairs(tmp_path / "mixed.txt")
+    with pytest.raises(InputError, match="names target vertex 4, but the target mesh has 3 vertices"):
+        load_ground_truth(tmp_path / "pairs.txt", n_source=4, n_target=3)
+
+
+def test_load_refuses_a_lone_vts_and_odd_specs(tmp_path):
+    (tmp_path / "a.vts").write_text("1\n")
+    with pytest.raises(InputError, match="indexes one mesh only"):
+        load_ground_truth(tmp_path / "a.vts", n_source=3, n_target=3)
+    with pytest.raises(InputError, match="must both be .vts files"):
+        load_ground_truth([tmp_path / "a.vts", tmp_path / "b.txt"], n_source=3, n_target=3)
+    with pytest.raises(InputError, match="got 3 items"):
+        load_ground_truth(["a", "b", "c"], n_source=3, n_target=3)

@@ -1,0 +1,39 @@
+"""meshcorr.stages.landmarks: a dense map from landmark pairs by geodesic descriptors."""
+
+import numpy as np
+
+from meshcorr.stages.landmarks import landmark_descriptors, landmark_map
+
+N = 21
+
+
+def path_row(i):
+    """Distances along a path of N vertices with unit edges."""
+    return np.abs(np.arange(N) - i).astype(float)
+
+
+def test_descriptors_are_distances_over_their_mean():
+    descriptors = landmark_descriptors(path_row, np.array([0, 20]))
+    raw = np.column_stack([path_row(0), path_row(20)])
+    np.testing.assert_allclose(descriptors, raw / raw.mean())
+    np.testing.assert_allclose(descriptors.mean(), 1.0)
+
+
+def test_the_identity_from_its_own_landmarks():
+    mapping = landmark_map(path_row, path_row, np.array([[0, 0], [20, 20]]))
+    np.testing.assert_array_equal(mapping, np.arange(N))
+
+
+def test_a_reversed_copy_is_found_and_scale_does_not_matter():
+    def scaled(i):  # the same path three times longer; the pairs say its numbering runs the other way
+        return 3.0 * path_row(i)
+
+    pairs = np.array([[0, 20], [20, 0]])
+    mapping = landmark_map(path_row, scaled, pairs)
+    np.testing.assert_array_equal(mapping, np.arange(N)[::-1])
+
+
+def test_landmarks_are_mapped_exactly_even_against_their_descriptors():
+    pairs = np.array([[0, 0], [20, 20], [10, 3]])  # the third pair disagrees with the other two
+    mapping = landmark_map(path_row, path_row, pairs)
+    assert mapping[10] == 3 and mapping[0] == 0 and mapping[20] == 20

@@ -9,6 +9,8 @@ import time
 
 from ..core.geodesics import GEODESIC_METHODS
 from ..spectral.modes import MODES, N_SAMPLES
+from .exits import EXIT_FAILED_RUNS
+from .set_values import checked_set, literal_value
 
 HELP = "map many pairs (a list, all pairs of a collection, or onto a template) on Dask (resumable)"
 
@@ -142,7 +144,6 @@ def _options(items: list[str], flags: dict | None = None) -> dict:
     """
     from ..collection.batch import _split_options
     from ..errors import ParameterError
-    from .bench import _value, checked_set
 
     options = dict(flags or {})
     _split_options(options)  # the flags alone
@@ -152,7 +153,7 @@ def _options(items: list[str], flags: dict | None = None) -> dict:
             raise ParameterError(f"--set takes KEY=VALUE, e.g. symmetry=cost; got {item!r}.")
         if key.strip() in FLAGGED:
             raise ParameterError(f"--set {item}: {key.strip()} has its own option here, {FLAGGED[key.strip()]}.")
-        given = dict(options, **{key.strip(): _value(value)})
+        given = dict(options, **{key.strip(): literal_value(value)})
         checked_set(item, lambda: _split_options(given))
         options = given
     return options
@@ -228,7 +229,5 @@ def run(args) -> int:
               + (f"; {len(failed)} failed, see the 'error' column of summary.csv" if failed else ""),
               file=sys.stderr)
     if failed:
-        from . import EXIT_FAILED_RUNS
-
         return EXIT_FAILED_RUNS
     return 0

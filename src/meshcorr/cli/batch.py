@@ -100,7 +100,7 @@ def add_parser(sub) -> None:
 
 
 def _pairs(args) -> list[tuple[str, str]]:
-    from ..collection.batch import all_pairs, read_pairs, template_pairs
+    from ..collection.pairs import all_pairs, read_pair_list, template_pairs
     from ..errors import ParameterError
 
     if args.shapes and not args.template:
@@ -121,7 +121,7 @@ def _pairs(args) -> list[tuple[str, str]]:
         raise ParameterError("--hub needs --all-pairs (it composes the maps between every two shapes through "
                              "the hub); with --template T, T is the hub already.")
     if args.pairs:
-        return read_pairs(args.pairs)
+        return read_pair_list(args.pairs)
     if args.all_pairs:
         return all_pairs(args.all_pairs)
     return template_pairs(args.template, args.shapes)
@@ -142,11 +142,11 @@ def _options(items: list[str], flags: dict | None = None) -> dict:
     meshcorr.match would take it, :func:`meshcorr.pipeline.methods.check_options`), before any work: a
     value that every pair would fail on names its --set item.
     """
-    from ..collection.batch import _split_options
+    from ..collection.options import split_options
     from ..errors import ParameterError
 
     options = dict(flags or {})
-    _split_options(options)  # the flags alone
+    split_options(options)  # the flags alone
     for item in items:
         key, eq, value = item.partition("=")
         if not eq or not key:
@@ -154,7 +154,7 @@ def _options(items: list[str], flags: dict | None = None) -> dict:
         if key.strip() in FLAGGED:
             raise ParameterError(f"--set {item}: {key.strip()} has its own option here, {FLAGGED[key.strip()]}.")
         given = dict(options, **{key.strip(): literal_value(value)})
-        checked_set(item, lambda: _split_options(given))
+        checked_set(item, lambda: split_options(given))
         options = given
     return options
 
@@ -200,7 +200,7 @@ def run(args) -> int:
     options = _options(args.set, flags)
     client = None
     if args.scheduler:
-        from ..collection.batch import connect
+        from ..collection.cluster import connect
 
         client = connect(args.scheduler)
     try:

@@ -8,9 +8,13 @@ import sys
 import time
 
 from ..core.geodesics import GEODESIC_METHODS
-from ..spectral.modes import MODES, N_SAMPLES
+from ..pipeline.settings import Settings
+from ..spectral.modes import MODES
 from .exits import EXIT_FAILED_RUNS
 from .set_values import checked_set, literal_value
+
+#: The defaults of the method options: those of :func:`meshcorr.match`.
+DEFAULTS = Settings()
 
 HELP = "map many pairs (a list, all pairs of a collection, or onto a template) on Dask (resumable)"
 
@@ -72,31 +76,38 @@ def add_parser(sub) -> None:
     p.add_argument("--consistency", action="store_true",
                    help="with --all-pairs: cycle-consistency error and consistent maps (consistent/)")
     g = p.add_argument_group("method options (as in 'meshcorr match')")
-    g.add_argument("-k", type=int, default=6, help="eigenpairs (default: 6)")
-    g.add_argument("--geodesic", choices=GEODESIC_METHODS, default="heat", help="geodesic solver (default: heat)")
-    g.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
-    g.add_argument("--refine", action=argparse.BooleanOptionalAction, default=True,
-                   help="ZoomOut refinement (default: on)")
-    g.add_argument("--shells", action=argparse.BooleanOptionalAction, default=True,
-                   help="smooth-shell alignment after the refinement, meshes only (default: on)")
-    g.add_argument("--oriented-starts", action="store_true",
+    g.add_argument("-k", type=int, default=DEFAULTS.k, help=f"eigenpairs (default: {DEFAULTS.k})")
+    g.add_argument("--geodesic", choices=GEODESIC_METHODS, default=DEFAULTS.geodesic,
+                   help=f"geodesic solver (default: {DEFAULTS.geodesic})")
+    g.add_argument("--seed", type=int, default=DEFAULTS.random_state,
+                   help=f"random seed (default: {DEFAULTS.random_state})")
+    g.add_argument("--refine", action=argparse.BooleanOptionalAction, default=DEFAULTS.refine,
+                   help=f"ZoomOut refinement (default: {_on(DEFAULTS.refine)})")
+    g.add_argument("--shells", action=argparse.BooleanOptionalAction, default=DEFAULTS.shells,
+                   help=f"smooth-shell alignment after the refinement, meshes only (default: {_on(DEFAULTS.shells)})")
+    g.add_argument("--oriented-starts", action="store_true", default=DEFAULTS.oriented_starts,
                    help="also start maps from the tips by an orientation-preserving fit (people standing; "
-                        "worse across species; default: off)")
-    g.add_argument("--mode", choices=MODES, default="auto", help="dense, scalable or auto (default: auto)")
-    g.add_argument("--samples", type=int, default=N_SAMPLES, metavar="N",
-                   help=f"Nystrom samples of the scalable mode (default: {N_SAMPLES})")
-    g.add_argument("--partial", choices=("source", "target"), default=None,
+                        f"worse across species; default: {_on(DEFAULTS.oriented_starts)})")
+    g.add_argument("--mode", choices=MODES, default=DEFAULTS.mode,
+                   help=f"dense, scalable or auto (default: {DEFAULTS.mode})")
+    g.add_argument("--samples", type=int, default=DEFAULTS.n_samples, metavar="N",
+                   help=f"Nystrom samples of the scalable mode (default: {DEFAULTS.n_samples})")
+    g.add_argument("--partial", choices=("source", "target"), default=DEFAULTS.partial,
                    help="in every pair, the SOURCE (or the TARGET) is a part of the other shape "
                         "(as 'meshcorr match --partial'; default: both whole)")
-    g.add_argument("--fill-holes", action=argparse.BooleanOptionalAction, default=True,
+    g.add_argument("--fill-holes", action=argparse.BooleanOptionalAction, default=DEFAULTS.fill_holes,
                    help="close each shape's holes before matching, as 'meshcorr match --fill-holes' "
-                        "(default: on)")
+                        f"(default: {_on(DEFAULTS.fill_holes)})")
     g.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="any other option of meshcorr.match, e.g. --set symmetry=cost (repeatable; VALUE is a "
                         "Python literal such as 8, 0.5, True or None, other text a string). A value meshcorr.match "
                         "refuses stops the batch before any work (exit 2)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
     p.set_defaults(run=run)
+
+
+def _on(switch: bool) -> str:
+    return "on" if switch else "off"
 
 
 def _pairs(args) -> list[tuple[str, str]]:

@@ -8,9 +8,13 @@ import time
 from pathlib import Path
 
 from ..core.geodesics import GEODESIC_METHODS
+from ..pipeline.settings import Settings
 from .exits import EXIT_FAILED_RUNS
 from .match import seed
 from .set_values import checked_set, literal_value
+
+#: The defaults of the options bench shares with :func:`meshcorr.match` (the seed).
+DEFAULTS = Settings()
 
 HELP = "benchmark methods on a dataset of pairs with ground truth (resumable)"
 
@@ -57,7 +61,8 @@ def add_parser(sub) -> None:
                         "work (exit 2)")
     p.add_argument("--eval-geodesic", choices=GEODESIC_METHODS, default="heat",
                    help="geodesic solver of the evaluation (default: heat)")
-    p.add_argument("--seed", type=seed, default=0, help="seed of the sample and of every method (default: 0)")
+    p.add_argument("--seed", type=seed, default=DEFAULTS.random_state,
+                   help=f"seed of the sample and of every method (default: {DEFAULTS.random_state})")
     p.add_argument("--retry-failed", action="store_true", help="run failed (pair, method) rows again")
     p.add_argument("--no-plot", action="store_true", help="do not draw curves.png")
     p.set_defaults(run=run)

@@ -200,7 +200,8 @@ class _Run:
 
     def key(self, kind: str, a: str, b: str, *extra) -> str:
         """The Dask key of the task ``kind`` ("match", "invert", "compose") of a pair."""
-        return f"{kind}-{task_key(a + chr(0) + b, self.settings, self.options, self.ground_truth, self.map_path(a, b), *extra)}"
+        made_of = (self.settings, self.options, self.ground_truth, self.map_path(a, b), *extra)
+        return f"{kind}-{task_key(a + chr(0) + b, *made_of)}"
 
     def made(self, pair: tuple[str, str], futures: dict):
         """The future of a map made in this run, else its record from an earlier run (or None)."""
@@ -370,7 +371,11 @@ def _check_hub(hub: str, pairs: list[tuple[str, str]], options: dict) -> str:
 
 
 def _auto_hub(dask_client, shape_keys: dict, settings: dict, options: dict) -> str:
-    """The shapes' spectral medoid (:func:`meshcorr.collection.consistency.spectral_medoid`); Shape-DNA from the workers."""
+    """The shapes' spectral medoid (:func:`~meshcorr.collection.consistency.spectral_medoid`) by their Shape-DNA.
+
+    The Shape-DNA of each prepared shape is computed on the workers; a shape
+    that could not be prepared is no candidate.
+    """
     from .consistency import spectral_medoid
 
     paths = sorted(shape_keys)

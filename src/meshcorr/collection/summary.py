@@ -65,7 +65,7 @@ def read_summary(out: Path) -> list[dict]:
 
 
 def write_summary(out: Path, records: list[dict]) -> None:
-    """``out/summary.json`` (counts, mean seconds and the records) and ``out/summary.csv`` (:data:`FIELDS`), atomically."""
+    """``out/summary.json`` (counts, mean seconds, the records) and ``out/summary.csv`` (:data:`FIELDS`), atomically."""
     failed = sum(r["status"] != DONE for r in records)
     seconds = [r["seconds"] for r in records if r["status"] == DONE and r["seconds"] is not None]
     payload = json.dumps({"n_pairs": len(records), "n_failed": failed,

@@ -278,7 +278,7 @@ def run_benchmark(dataset_dir, methods: Sequence[str], out_dir, *, n_pairs: int 
     except OSError as exc:
         raise ParameterError(f"Cannot create the output folder {out}: {exc.strerror}.") from exc
     check_run_settings(out, {"geodesic": geodesic, "random_state": random_state,
-                              "method_options": method_options}, dataset=dataset_identity(dataset))
+                             "method_options": method_options}, dataset=dataset_identity(dataset))
     pairs = stratified_sample(dataset.pairs, n_pairs, random_state)
     csv_path = out / "results.csv"
     rows = read_rows(csv_path)
@@ -292,41 +292,13 @@ def run_benchmark(dataset_dir, methods: Sequence[str], out_dir, *, n_pairs: int 
         todo = [m for m in methods if (source_name, target_name, m) not in done]
         if not todo:
             continue
-        try:
-            source, target, truth, sym = _load_pair(dataset, source_name, target_name)
-            if len(todo) > 1:  # every map scores from the true vertices' rows: solve them once
-                cache.precompute(target, np.concatenate([truth.target] + ([sym.target] if sym else [])))
-        except MeshcorrError as exc:  # a bad pair is recorded, not fatal
-            load_error = one_line(exc)
-        else:
-            load_error = None
+        pair = _scored_pair(dataset, source_name, target_name, cache, precompute=len(todo) > 1)
         for method in todo:
             label = f"{source_name}-{target_name} {method}"
             if progress is not None:
                 progress(count, total, f"{label}: running")
-            row = {"source": source_name, "target": target_name, "class": shape_class(source_name),
-                   "method": method}
-            start = time.perf_counter()
-            try:
-                if load_error is not None:
-                    raise _PairError(load_error)
-                # fresh Mesh objects: no method may reuse geodesics another one cached on them
-                result = run_method(method, _fresh(source), _fresh(target), random_state=random_state,
-                                    **method_options.get(method, {}))
-                row["seconds"] = time.perf_counter() - start
-                start = time.perf_counter()
-                report = evaluate_map(target, result.map, truth, sym_truth=sym, geodesic=geodesic,
-                                      cache=cache)
-                row["eval_seconds"] = time.perf_counter() - start
-            except (KeyboardInterrupt, MemoryError):
-                raise
-            except Exception as exc:  # noqa: BLE001 - a failing method must not end the run
-                row.update(status="failed", error=_row_error(exc),
-                           seconds=row.get("seconds", time.perf_counter() - start))
-            else:
-                row.update(status="ok", **{k: report.get(k) for k in FIELDS if k in report},
-                           **{f"under_{t}": f for t, f in report["under"].items()})
-                _save_arrays(out, method, source_name, target_name, result.map, report)
+            row = _run_row(pair, source_name, target_name, method, method_options.get(method, {}),
+                           random_state=random_state, geodesic=geodesic, cache=cache, out=out)
             rows.append({key: _cell(row.get(key)) for key in FIELDS})
             _write_rows(csv_path, rows)
             count += 1
@@ -336,6 +308,51 @@ def run_benchmark(dataset_dir, methods: Sequence[str], out_dir, *, n_pairs: int 
                 progress(count, total, f"{label}: {status}")
     wanted = {(s, t, m) for s, t in pairs for m in methods}
     return [r for r in rows if (r["source"], r["target"], r["method"]) in wanted]
+
+
+def _scored_pair(dataset: Dataset, source_name: str, target_name: str, cache: GeodesicCache, *,
+                 precompute: bool):
+    """``(source, target, truth, sym)`` of a pair (:func:`_load_pair`), or the one-line error that prevents it.
+
+    With ``precompute`` (several methods to score), the geodesics from the true
+    target vertices are solved once into ``cache``.
+    """
+    try:
+        source, target, truth, sym = _load_pair(dataset, source_name, target_name)
+        if precompute:  # every map scores from the true vertices' rows: solve them once
+            cache.precompute(target, np.concatenate([truth.target] + ([sym.target] if sym else [])))
+    except MeshcorrError as exc:  # a bad pair is recorded, not fatal
+        return one_line(exc)
+    return source, target, truth, sym
+
+
+def _run_row(pair, source_name: str, target_name: str, method: str, options: dict, *, random_state: int,
+             geodesic: str, cache: GeodesicCache, out: Path) -> dict:
+    """The row of one (pair, method): the map made, scored and saved, or the failure's message.
+
+    ``pair`` is :func:`_scored_pair`'s answer. Values are not yet cells (:func:`_cell`).
+    """
+    row = {"source": source_name, "target": target_name, "class": shape_class(source_name), "method": method}
+    start = time.perf_counter()
+    try:
+        if isinstance(pair, str):
+            raise _PairError(pair)
+        source, target, truth, sym = pair
+        # fresh Mesh objects: no method may reuse geodesics another one cached on them
+        result = run_method(method, _fresh(source), _fresh(target), random_state=random_state, **options)
+        row["seconds"] = time.perf_counter() - start
+        start = time.perf_counter()
+        report = evaluate_map(target, result.map, truth, sym_truth=sym, geodesic=geodesic, cache=cache)
+        row["eval_seconds"] = time.perf_counter() - start
+    except (KeyboardInterrupt, MemoryError):
+        raise
+    except Exception as exc:  # noqa: BLE001 - a failing method must not end the run
+        row.update(status="failed", error=_row_error(exc), seconds=row.get("seconds", time.perf_counter() - start))
+    else:
+        row.update(status="ok", **{k: report.get(k) for k in FIELDS if k in report},
+                   **{f"under_{t}": f for t, f in report["under"].items()})
+        _save_arrays(out, method, source_name, target_name, result.map, report)
+    return row
 
 
 def _fresh(mesh: Mesh) -> Mesh:

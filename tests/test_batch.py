@@ -14,7 +14,8 @@ import trimesh
 import meshcorr
 from meshcorr.evaluation import cuts as cuts
 from meshcorr import datasets as ds
-from meshcorr.collection.batch import all_pairs, batch, map_name, read_pairs, template_pairs
+from meshcorr.collection.batch import batch
+from meshcorr.collection.pairs import all_pairs, map_name, read_pair_list, template_pairs
 from meshcorr.cli import main
 from meshcorr.collection.consistency import (choose_hub, cycle_errors, invert, sample_triples, shape_dna, spectral_medoid,
                                   through_hub)
@@ -316,19 +317,19 @@ def test_batch_checks_its_input_before_any_work(shapes, tmp_path):
     assert template_pairs(paths[0], paths[:3]) == [(paths[0], paths[1]), (paths[0], paths[2])]
     (tmp_path / "pairs.txt").write_text("a.off b.off c.off\n")
     with pytest.raises(ParameterError, match="line 1: expected two mesh paths"):
-        read_pairs(tmp_path / "pairs.txt")
+        read_pair_list(tmp_path / "pairs.txt")
     (tmp_path / "pairs.txt").write_text("# nothing\n")
     with pytest.raises(ParameterError, match="lists no pairs"):
-        read_pairs(tmp_path / "pairs.txt")
+        read_pair_list(tmp_path / "pairs.txt")
     with pytest.raises(ParameterError, match="does not exist"):
-        read_pairs(tmp_path / "none.txt")
+        read_pair_list(tmp_path / "none.txt")
     (tmp_path / "pairs.txt").write_text("a.off /abs/b.off\n")
-    assert read_pairs(tmp_path / "pairs.txt") == [(str(tmp_path / "a.off"), "/abs/b.off")]
+    assert read_pair_list(tmp_path / "pairs.txt") == [(str(tmp_path / "a.off"), "/abs/b.off")]
 
 
 def test_cli_usage_errors(shapes, tmp_path, capsys, monkeypatch):
     paths, _ = shapes
-    monkeypatch.setattr("meshcorr.collection.batch.CONNECT_TIMEOUT", 1)
+    monkeypatch.setattr("meshcorr.collection.cluster.CONNECT_TIMEOUT", 1)
     assert main(["batch", "--all-pairs", *paths[:2], "--out", str(tmp_path), "--set", "nokey"]) == 2
     assert "--set takes KEY=VALUE" in capsys.readouterr().err
     assert main(["batch", "--pairs", "p.txt", paths[0], "--out", str(tmp_path)]) == 2
@@ -446,7 +447,7 @@ def test_consistency_error_paths(shapes, tmp_path):
 
 
 def test_a_damaged_summary_and_a_partial_target_are_reported(shapes, tmp_path):
-    from meshcorr.collection.batch import _mean_error
+    from meshcorr.collection.tasks import mean_error
     from meshcorr.shapes.prepared import prepare
 
     paths, _ = shapes
@@ -458,7 +459,7 @@ def test_a_damaged_summary_and_a_partial_target_are_reported(shapes, tmp_path):
            np.concatenate([shape.faces, shape.faces + shape.n_vertices]))
     partial = prepare(two, largest_component=True)
     with pytest.raises(ParameterError, match="needs the whole target mesh"):
-        _mean_error(partial, partial, np.arange(partial.n_vertices), "a.off", "b.off", "identity", "heat")
+        mean_error(partial, partial, np.arange(partial.n_vertices), "a.off", "b.off", "identity", "heat")
 
 
 def test_cli_batch_cache_and_ctrl_c(cluster, shapes, tmp_path, monkeypatch, capsys):

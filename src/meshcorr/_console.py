@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import sys
 
-#: The exit code of an interrupted run (128 + SIGINT), as :data:`meshcorr.cli.EXIT_INTERRUPTED`.
+#: The exit code of an interrupted run (128 + SIGINT), as :data:`meshcorr.cli.exits.EXIT_INTERRUPTED`.
 EXIT_INTERRUPTED = 130
 
 

@@ -12,7 +12,7 @@ import sys
 import warnings
 
 from .. import __version__
-from ..errors import InputError, MeshcorrError, MeshError, MeshWarning
+from ..errors import MeshcorrError, MeshWarning
 from ..io import quiet_trimesh
 from . import batch as _batch
 from . import bench as _bench
@@ -24,29 +24,11 @@ from . import match as _match
 from . import show as _show
 from . import transfer as _transfer
 from ._signals import interrupt_once
+from .exits import (EXIT_BROKEN_PIPE, EXIT_CODES, EXIT_ERROR, EXIT_FAILED_RUNS, EXIT_INPUT,  # noqa: F401 - the
+                    EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, exit_code)  # codes' home before cli.exits
 
 #: Sub-command modules, in the order ``--help`` lists them.
 COMMANDS = [_match, _evaluate, _bench, _show, _transfer, _maps, _embed, _batch, _cache]
-
-#: Exit codes, listed in ``--help`` and the README.
-EXIT_OK = 0
-EXIT_ERROR = 1  # an internal error or out of memory
-EXIT_USAGE = 2  # bad usage: an unknown flag, a bad option value, an output that cannot be written
-EXIT_INPUT = 3  # bad input data: a mesh, map or ground-truth file that cannot be used
-EXIT_FAILED_RUNS = 4  # 'bench', 'batch': some runs failed (recorded in their results)
-EXIT_INTERRUPTED = 130  # Ctrl-C (SIGINT); no output file is left behind
-EXIT_BROKEN_PIPE = 141  # stdout closed early (piped into 'head'), as 128 + SIGPIPE
-
-EXIT_CODES = f"""\
-exit codes:
-  {EXIT_OK}    success
-  {EXIT_ERROR}    internal error or out of memory
-  {EXIT_USAGE}    bad usage: unknown flag, bad option value, an output that cannot be written
-  {EXIT_INPUT}    bad input data: a mesh, map or ground-truth file that cannot be used
-  {EXIT_FAILED_RUNS}    bench, batch: some runs failed (recorded in their results)
-  {EXIT_INTERRUPTED}  interrupted (Ctrl-C); no output file is written (batch keeps the maps it finished)
-  {EXIT_BROKEN_PIPE}  stdout was closed early (e.g. piped into head)
-"""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -84,13 +66,6 @@ def _add_common_options(parser: argparse.ArgumentParser, *, default) -> None:
 
 def _show_warning(message, category, filename, lineno, file=None, line=None):
     print(f"meshcorr: warning: {message}", file=sys.stderr)
-
-
-def exit_code(error: MeshcorrError) -> int:
-    """The exit code of an expected error: bad input data (3) or bad usage (2)."""
-    if isinstance(error, (MeshError, InputError)):
-        return EXIT_INPUT
-    return EXIT_USAGE if isinstance(error, ValueError) else EXIT_ERROR
 
 
 def main(argv: list[str] | None = None) -> int:

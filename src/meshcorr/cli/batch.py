@@ -8,7 +8,13 @@ import sys
 import time
 
 from ..core.geodesics import GEODESIC_METHODS
-from ..spectral.modes import MODES, N_SAMPLES
+from ..pipeline.settings import Settings
+from ..spectral.modes import MODES
+from .exits import EXIT_FAILED_RUNS
+from .set_values import checked_set, literal_value
+
+#: The defaults of the method options: those of :func:`meshcorr.match`.
+DEFAULTS = Settings()
 
 HELP = "map many pairs (a list, all pairs of a collection, or onto a template) on Dask (resumable)"
 
@@ -70,25 +76,28 @@ def add_parser(sub) -> None:
     p.add_argument("--consistency", action="store_true",
                    help="with --all-pairs: cycle-consistency error and consistent maps (consistent/)")
     g = p.add_argument_group("method options (as in 'meshcorr match')")
-    g.add_argument("-k", type=int, default=6, help="eigenpairs (default: 6)")
-    g.add_argument("--geodesic", choices=GEODESIC_METHODS, default="heat", help="geodesic solver (default: heat)")
-    g.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
-    g.add_argument("--refine", action=argparse.BooleanOptionalAction, default=True,
-                   help="ZoomOut refinement (default: on)")
-    g.add_argument("--shells", action=argparse.BooleanOptionalAction, default=True,
-                   help="smooth-shell alignment after the refinement, meshes only (default: on)")
-    g.add_argument("--oriented-starts", action="store_true",
+    g.add_argument("-k", type=int, default=DEFAULTS.k, help=f"eigenpairs (default: {DEFAULTS.k})")
+    g.add_argument("--geodesic", choices=GEODESIC_METHODS, default=DEFAULTS.geodesic,
+                   help=f"geodesic solver (default: {DEFAULTS.geodesic})")
+    g.add_argument("--seed", type=int, default=DEFAULTS.random_state,
+                   help=f"random seed (default: {DEFAULTS.random_state})")
+    g.add_argument("--refine", action=argparse.BooleanOptionalAction, default=DEFAULTS.refine,
+                   help=f"ZoomOut refinement (default: {_on(DEFAULTS.refine)})")
+    g.add_argument("--shells", action=argparse.BooleanOptionalAction, default=DEFAULTS.shells,
+                   help=f"smooth-shell alignment after the refinement, meshes only (default: {_on(DEFAULTS.shells)})")
+    g.add_argument("--oriented-starts", action="store_true", default=DEFAULTS.oriented_starts,
                    help="also start maps from the tips by an orientation-preserving fit (people standing; "
-                        "worse across species; default: off)")
-    g.add_argument("--mode", choices=MODES, default="auto", help="dense, scalable or auto (default: auto)")
-    g.add_argument("--samples", type=int, default=N_SAMPLES, metavar="N",
-                   help=f"Nystrom samples of the scalable mode (default: {N_SAMPLES})")
-    g.add_argument("--partial", choices=("source", "target"), default=None,
+                        f"worse across species; default: {_on(DEFAULTS.oriented_starts)})")
+    g.add_argument("--mode", choices=MODES, default=DEFAULTS.mode,
+                   help=f"dense, scalable or auto (default: {DEFAULTS.mode})")
+    g.add_argument("--samples", type=int, default=DEFAULTS.n_samples, metavar="N",
+                   help=f"Nystrom samples of the scalable mode (default: {DEFAULTS.n_samples})")
+    g.add_argument("--partial", choices=("source", "target"), default=DEFAULTS.partial,
                    help="in every pair, the SOURCE (or the TARGET) is a part of the other shape "
                         "(as 'meshcorr match --partial'; default: both whole)")
-    g.add_argument("--fill-holes", action=argparse.BooleanOptionalAction, default=True,
+    g.add_argument("--fill-holes", action=argparse.BooleanOptionalAction, default=DEFAULTS.fill_holes,
                    help="close each shape's holes before matching, as 'meshcorr match --fill-holes' "
-                        "(default: on)")
+                        f"(default: {_on(DEFAULTS.fill_holes)})")
     g.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="any other option of meshcorr.match, e.g. --set symmetry=cost (repeatable; VALUE is a "
                         "Python literal such as 8, 0.5, True or None, other text a string). A value meshcorr.match "
@@ -97,8 +106,12 @@ def add_parser(sub) -> None:
     p.set_defaults(run=run)
 
 
+def _on(switch: bool) -> str:
+    return "on" if switch else "off"
+
+
 def _pairs(args) -> list[tuple[str, str]]:
-    from ..collection.batch import all_pairs, read_pairs, template_pairs
+    from ..collection.pairs import all_pairs, read_pair_list, template_pairs
     from ..errors import ParameterError
 
     if args.shapes and not args.template:
@@ -119,7 +132,7 @@ def _pairs(args) -> list[tuple[str, str]]:
         raise ParameterError("--hub needs --all-pairs (it composes the maps between every two shapes through "
                              "the hub); with --template T, T is the hub already.")
     if args.pairs:
-        return read_pairs(args.pairs)
+        return read_pair_list(args.pairs)
     if args.all_pairs:
         return all_pairs(args.all_pairs)
     return template_pairs(args.template, args.shapes)
@@ -140,20 +153,19 @@ def _options(items: list[str], flags: dict | None = None) -> dict:
     meshcorr.match would take it, :func:`meshcorr.pipeline.methods.check_options`), before any work: a
     value that every pair would fail on names its --set item.
     """
-    from ..collection.batch import _split_options
+    from ..collection.options import split_options
     from ..errors import ParameterError
-    from .bench import _value, checked_set
 
     options = dict(flags or {})
-    _split_options(options)  # the flags alone
+    split_options(options)  # the flags alone
     for item in items:
         key, eq, value = item.partition("=")
         if not eq or not key:
             raise ParameterError(f"--set takes KEY=VALUE, e.g. symmetry=cost; got {item!r}.")
         if key.strip() in FLAGGED:
             raise ParameterError(f"--set {item}: {key.strip()} has its own option here, {FLAGGED[key.strip()]}.")
-        given = dict(options, **{key.strip(): _value(value)})
-        checked_set(item, lambda: _split_options(given))
+        given = dict(options, **{key.strip(): literal_value(value)})
+        checked_set(item, lambda: split_options(given))
         options = given
     return options
 
@@ -199,7 +211,7 @@ def run(args) -> int:
     options = _options(args.set, flags)
     client = None
     if args.scheduler:
-        from ..collection.batch import connect
+        from ..collection.cluster import connect
 
         client = connect(args.scheduler)
     try:
@@ -228,7 +240,5 @@ def run(args) -> int:
               + (f"; {len(failed)} failed, see the 'error' column of summary.csv" if failed else ""),
               file=sys.stderr)
     if failed:
-        from . import EXIT_FAILED_RUNS
-
         return EXIT_FAILED_RUNS
     return 0

@@ -3,14 +3,18 @@
 from __future__ import annotations
 
 import argparse
-import ast
 import sys
 import time
 from pathlib import Path
-from typing import Callable
 
 from ..core.geodesics import GEODESIC_METHODS
+from ..pipeline.settings import Settings
+from .exits import EXIT_FAILED_RUNS
 from .match import seed
+from .set_values import checked_set, literal_value
+
+#: The defaults of the options bench shares with :func:`meshcorr.match` (the seed).
+DEFAULTS = Settings()
 
 HELP = "benchmark methods on a dataset of pairs with ground truth (resumable)"
 
@@ -57,7 +61,8 @@ def add_parser(sub) -> None:
                         "work (exit 2)")
     p.add_argument("--eval-geodesic", choices=GEODESIC_METHODS, default="heat",
                    help="geodesic solver of the evaluation (default: heat)")
-    p.add_argument("--seed", type=seed, default=0, help="seed of the sample and of every method (default: 0)")
+    p.add_argument("--seed", type=seed, default=DEFAULTS.random_state,
+                   help=f"seed of the sample and of every method (default: {DEFAULTS.random_state})")
     p.add_argument("--retry-failed", action="store_true", help="run failed (pair, method) rows again")
     p.add_argument("--no-plot", action="store_true", help="do not draw curves.png")
     p.set_defaults(run=run)
@@ -91,14 +96,7 @@ def _options_of(method: str) -> tuple[str, ...]:
     return tuple(name for name in applicable(method) if name not in _RESERVED and name != "n_landmarks")
 
 
-def _value(text: str):
-    try:
-        return ast.literal_eval(text)
-    except (ValueError, SyntaxError):
-        return text
-
-
-def method_options(methods: list[str], k, geodesic, settings: list[str]) -> dict[str, dict]:
+def options_by_method(methods: list[str], k, geodesic, settings: list[str]) -> dict[str, dict]:
     """``{method: {option: value}}`` from -k, --geodesic and --set METHOD:KEY=VALUE."""
     from ..evaluation.benchmark import SPECTRAL_FAMILY
     from ..errors import ParameterError
@@ -127,29 +125,10 @@ def method_options(methods: list[str], k, geodesic, settings: list[str]) -> dict
         if key not in allowed:
             raise ParameterError(f"--set {item!r}: the method {method!r} has no option {key!r}. Its options are: "
                                  f"{', '.join(allowed)}.")
-        given = dict(options[method], **{key: _value(value)})
+        given = dict(options[method], **{key: literal_value(value)})
         checked_set(item, lambda: check_options(method, **given))  # a value every pair would fail on
         options[method] = given
     return {m: o for m, o in options.items() if o}
-
-
-#: The fix named after a --set item that its method refuses.
-SET_FIX = ("Correct this --set (its VALUE is read as a Python literal such as 8, 0.5, True or None; other text "
-           "is a string, e.g. reorder=greedy), or leave it out to keep the method's default.")
-
-
-def checked_set(item: str, check: Callable[[], object]) -> None:
-    """Run ``check()``, which raises the method's ParameterError for options with --set ``item`` in them.
-
-    The error is raised again as one paragraph: the --set item, the method's message (the
-    option, the value, what is allowed) and the fix.
-    """
-    from ..errors import ParameterError
-
-    try:
-        check()
-    except ParameterError as exc:
-        raise ParameterError(f"--set {item!r}: {exc} {SET_FIX}") from None
 
 
 class PairProgress:
@@ -181,7 +160,7 @@ def run(args) -> int:
     from ..errors import ParameterError
 
     methods = check_methods([m.strip() for m in args.methods.split(",") if m.strip()])
-    options = method_options(methods, args.k, args.geodesic, args.set)
+    options = options_by_method(methods, args.k, args.geodesic, args.set)
     if os.path.isdir(args.dataset) and os.path.realpath(args.out) == os.path.realpath(args.dataset):
         raise ParameterError(f"--out {args.out} is the dataset folder DATASET_DIR: the results would be mixed "
                              "with its meshes. Give another --out folder.")
@@ -206,8 +185,6 @@ def run(args) -> int:
     sys.stdout.write(md.read_text())
     failed = sum(e["failed"] for e in table)
     if failed:
-        from . import EXIT_FAILED_RUNS
-
         if not args.quiet:
             print(f"meshcorr: {failed} (pair, method) runs failed; see the 'error' column of "
                   f"{Path(args.out) / 'results.csv'}", file=sys.stderr)

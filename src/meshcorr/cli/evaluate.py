@@ -130,24 +130,61 @@ def _finite(value):
 
 
 def run(args) -> int:
-    from ..errors import InputError
+    from ..core.mesh import Mesh
     from ..evaluation.metrics import GeodesicCache, cumulative_curve, evaluate_map, map_quality, scalar_summary
-    from ..evaluation.ground_truth import load_ground_truth
-    from ..io import check_outputs, read_mesh
-    from ._mapfile import read_checked_map
     from .match import progress_for
-    from ..core.mesh import Mesh, as_mesh
-    from .show import check_png, one_surface, truth_inputs
 
     thresholds = _thresholds(args.thresholds)
     if args.curve:
-        from ..viz.plots import require_matplotlib
+        _check_curve(args)
+    source, target, mapping, truth, sym = _read_inputs(args)
+    # The geodesic solves take minutes on a large TARGET with a dense truth: say how far they are.
+    cache = GeodesicCache(args.geodesic, progress=progress_for(args, f"{args.map} on {args.target}"))
+    report = evaluate_map(target, mapping, truth, sym_truth=sym, thresholds=thresholds,
+                          geodesic=args.geodesic, cache=cache)
+    summary = scalar_summary(report)
+    summary.update(map_quality(Mesh(*source, name=args.source), target, mapping))
+    summary.update(source=args.source, target=args.target, map=args.map, geodesic=args.geodesic)
+    if args.curve:  # the last work: an interrupt before it leaves no curve behind
+        from ..viz.plots import plot_cumulative_curves
 
-        check_png(args.curve, "--curve")
-        check_outputs({"--curve": args.curve},
-                      {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map,
-                       **truth_inputs(args.gt), **truth_inputs(args.sym, "--sym")})
-        require_matplotlib()
+        curves = {"direct truth": cumulative_curve(report["errors"])}
+        if sym is not None:
+            curves["mirrored truth"] = cumulative_curve(report["sym_errors"])
+        plot_cumulative_curves(args.curve, curves, title=f"{args.map} on {args.target}")
+    if args.json:  # strict JSON: an error that cannot be measured (no truth point mapped) is null, not NaN
+        json.dump(_finite(summary), sys.stdout, indent=2, allow_nan=False)
+        sys.stdout.write("\n")
+        return 0
+    _print_report(report, summary, sym is not None)
+    return 0
+
+
+def _check_curve(args) -> None:
+    """--curve: a PNG path that does not overwrite an input, and matplotlib installed; before any work."""
+    from ..io import check_outputs
+    from ..viz.plots import require_matplotlib
+    from .show import check_png, truth_inputs
+
+    check_png(args.curve, "--curve")
+    check_outputs({"--curve": args.curve},
+                  {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map,
+                   **truth_inputs(args.gt), **truth_inputs(args.sym, "--sym")})
+    require_matplotlib()
+
+
+def _read_inputs(args):
+    """``(source, target, mapping, truth, sym)``: SOURCE as read (vertices, faces), the TARGET mesh, MAP and the truth.
+
+    With --largest-component the map and the truth are restricted to TARGET's largest piece.
+    """
+    from ..core.mesh import as_mesh
+    from ..errors import InputError
+    from ..evaluation.ground_truth import load_ground_truth
+    from ..io import read_mesh
+    from ._mapfile import read_checked_map
+    from .show import one_surface
+
     source = read_mesh(args.source, name=f"SOURCE {args.source}")
     n_source = len(source[0])
     if args.largest_component:
@@ -169,24 +206,11 @@ def run(args) -> int:
         if not (mapping >= 0).any():
             raise InputError(f"{args.map} maps no SOURCE vertex onto the largest piece of {args.target}: "
                              "there is nothing to score there.")
-    # The geodesic solves take minutes on a large TARGET with a dense truth: say how far they are.
-    cache = GeodesicCache(args.geodesic, progress=progress_for(args, f"{args.map} on {args.target}"))
-    report = evaluate_map(target, mapping, truth, sym_truth=sym, thresholds=thresholds,
-                          geodesic=args.geodesic, cache=cache)
-    summary = scalar_summary(report)
-    summary.update(map_quality(Mesh(*source, name=args.source), target, mapping))
-    summary.update(source=args.source, target=args.target, map=args.map, geodesic=args.geodesic)
-    if args.curve:  # the last work: an interrupt before it leaves no curve behind
-        from ..viz.plots import plot_cumulative_curves
+    return source, target, mapping, truth, sym
 
-        curves = {"direct truth": cumulative_curve(report["errors"])}
-        if sym is not None:
-            curves["mirrored truth"] = cumulative_curve(report["sym_errors"])
-        plot_cumulative_curves(args.curve, curves, title=f"{args.map} on {args.target}")
-    if args.json:  # strict JSON: an error that cannot be measured (no truth point mapped) is null, not NaN
-        json.dump(_finite(summary), sys.stdout, indent=2, allow_nan=False)
-        sys.stdout.write("\n")
-        return 0
+
+def _print_report(report: dict, summary: dict, mirrored: bool) -> None:
+    """The scores on stdout, one line each (the text form; --json writes ``summary``)."""
     under = " / ".join(f"{100 * v:.1f} %" for v in report["under"].values())
     print(f"points evaluated:      {report['n_points']}"
           + (f" ({report['n_unmapped']} unmapped, counted as misses)" if report["n_unmapped"] else ""))
@@ -199,7 +223,6 @@ def run(args) -> int:
           f"bijectivity {summary['bijectivity']:.3f}")
     print(f"continuity:            {summary['continuity']:.3f} (edge-length ratio; "
           f"{100 * summary['torn_edges']:.1f} % of edges torn)")
-    if sym is not None:
+    if mirrored:
         verdict = "FLIPPED (closer to the mirrored truth)" if report["flipped"] else "not flipped"
         print(f"vs mirrored truth:     {report['sym_mean_error']:.4f} -> {verdict}")
-    return 0

@@ -1,11 +1,15 @@
 """Collections of shapes: many maps on Dask (``batch``) and maps made consistent through a hub (``consistency``).
 
 ``meshcorr.collection.batch`` is the module; :func:`meshcorr.batch` the
-function. The names of the former ``meshcorr.collection`` module
-(``read_pairs``, ``all_pairs``, ...) are looked up in ``batch`` on first use.
+function. Its steps: the pair lists (``pairs``), the options and keys
+(``options``), the Dask cluster (``cluster``), the workers' tasks (``tasks``)
+and the records and summary files (``summary``). The names of the former
+``meshcorr.collection`` module (``all_pairs``, ``map_name``, ...) are looked
+up in ``batch`` on first use.
 """
 
 
 from .._moved import forwarding
+from . import batch  # noqa: F401 - the module, never the function of the same name (that is meshcorr.batch)
 
 __getattr__ = forwarding(__name__, "batch")

@@ -21,7 +21,6 @@ from __future__ import annotations
 import csv
 import hashlib
 import io
-import json
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,10 +34,12 @@ from .metrics import THRESHOLDS, GeodesicCache, cumulative_curve, evaluate_map
 from .ground_truth import load_ground_truth
 from ..io import atomic_write
 from ..core.mesh import Mesh, as_mesh
-from ..pipeline.methods import check_options
+from ..pipeline.methods import check_options, run_method
+from ..runtime.messages import ONE_LINE_LENGTH, one_line
+from .run_settings import check_run_settings
 
 __all__ = ["METHODS", "Dataset", "FIELDS", "dataset_identity", "load_dataset", "read_rows", "run_benchmark",
-           "run_method", "stratified_sample", "summarize", "write_summary"]
+           "stratified_sample", "summarize", "write_summary"]
 
 #: Methods the benchmark knows; all but "spectral" come from meshcorr.baselines.
 METHODS = ("spectral", "shapiro-brady", "shapiro-brady-scaled", "tps-rpm", "icp", "shape-context")
@@ -152,26 +153,6 @@ def stratified_sample(pairs: Sequence[tuple[str, str]], n: int | None, random_st
     return [pairs[i] for i in sorted(chosen)]
 
 
-def run_method(name: str, source, target, *, random_state: int = 0, progress=None, **options):
-    """Run one correspondence method; ``"spectral"`` is :func:`meshcorr.match`.
-
-    The baselines come from ``meshcorr.baselines.run_method(name, source,
-    target, *, prealign=True, random_state=0, progress=None, **options)``.
-
-    Returns
-    -------
-    result : Correspondence
-    """
-    if name == "spectral":
-        from ..pipeline.run import match
-
-        return match(source, target, random_state=random_state, progress=progress, **options)
-    from .. import baselines
-
-    return baselines.run_method(name, source, target, random_state=random_state, progress=progress,
-                                **options)
-
-
 def check_methods(methods: Sequence[str]) -> list[str]:
     """Check method names (and that the baselines are importable) before a long run."""
     methods = list(dict.fromkeys(methods))
@@ -182,7 +163,7 @@ def check_methods(methods: Sequence[str]) -> list[str]:
             raise ParameterError(f"Unknown method {name!r}; choose from {', '.join(METHODS)}.")
     if any(name != "spectral" for name in methods):
         try:
-            from ..baselines import run_method as _  # noqa: F401
+            from .. import baselines  # noqa: F401
         except ImportError as exc:
             raise ParameterError("The baselines (meshcorr.baselines) are not available in this "
                                  "installation; run with --methods spectral.") from exc
@@ -243,79 +224,9 @@ def dataset_identity(dataset: Dataset) -> dict:
             "content": content, "files": files}
 
 
-def _same_dataset(previous, current: dict) -> bool:
-    return previous["pairs"] == current["pairs"] and previous["content"] == current["content"]
-
-
-def _pairs(n) -> str:
-    return f"{n} pair{'' if n == 1 else 's'}" if isinstance(n, int) else "? pairs"
-
-
-def _dataset_mismatch(out: Path, previous: dict, current: dict) -> str:
-    """One paragraph: which dataset ``out`` holds results of, which one this run is of, what to do."""
-    old_files, new_files = previous.get("files"), current["files"]
-    changes = []
-    if previous["pairs"] != current["pairs"]:
-        changes.append(f"pair list ({_pairs(previous.get('n_pairs'))} recorded, {_pairs(current['n_pairs'])} now)")
-    if previous["content"] != current["content"]:
-        if isinstance(old_files, dict):
-            changed = sorted(k for k in old_files.keys() | new_files.keys() if old_files.get(k) != new_files.get(k))
-            changes.append("mesh / truth files (" + ", ".join(changed[:3])
-                           + (f" and {len(changed) - 3} more" if len(changed) > 3 else "") + ")")
-        else:
-            changes.append("mesh / truth files")
-    if previous["path"] == current["path"]:
-        what = (f"{out} holds results of the dataset {previous['path']}, but that folder's "
-                f"{' and '.join(changes)} changed since")
-    else:
-        what = (f"{out} holds results of the dataset {previous['path']}, and this run is of another "
-                f"dataset, {current['path']}, whose {' and '.join(changes)} differ")
-    return (f"{what}: resuming would report those records as this dataset's results. Use another --out "
-            f"folder, or delete {out} (its results.csv, run.json, maps/ and errors/) to start over; delete "
-            f"only {out / 'run.json'} if you know the records there still hold for this dataset.")
-
-
-def _check_run_settings(out: Path, settings: dict, *, dataset: dict | None = None) -> None:
-    """Refuse to mix results made with different settings (or, given ``dataset``, data) in one folder.
-
-    ``dataset`` is :func:`dataset_identity` of this run's data, kept in ``run.json`` under
-    ``"dataset"``; a ``run.json`` written before it was kept (no such key) is taken as of this
-    dataset, which is then recorded.
-    """
-    path = out / "run.json"
-    current = dict(settings) if dataset is None else dict(settings, dataset=dataset)
-    if path.is_file():
-        try:
-            previous = json.loads(path.read_text())
-        except (ValueError, UnicodeDecodeError):
-            raise InputError(f"{path} is damaged (not JSON): delete it to run again with the current "
-                             "settings, or use another --out folder.") from None
-        if not isinstance(previous, dict):
-            raise InputError(f"{path} is damaged (not a JSON object): delete it to run again with the "
-                             "current settings, or use another --out folder.")
-        if dataset is not None:
-            recorded = previous.pop("dataset", None)
-            if recorded is not None:
-                if not (isinstance(recorded, dict) and all(isinstance(recorded.get(k), str)
-                                                           for k in ("path", "pairs", "content"))):
-                    raise InputError(f"{path} is damaged (its 'dataset' entry is not one this version "
-                                     "writes): delete it to run again, or use another --out folder.")
-                if not _same_dataset(recorded, dataset):
-                    raise ParameterError(_dataset_mismatch(out, recorded, dataset))
-        if previous != settings:
-            raise ParameterError(
-                f"{out} holds results made with other settings ({previous}); this run uses "
-                f"{settings}. Use another --out folder or delete the old results."
-            )
-        if dataset is None or recorded is not None:
-            return
-    payload = json.dumps(current, indent=2, sort_keys=True).encode()
-    atomic_write(path, lambda file: file.write(payload))
-
-
-def _one_line(exc: BaseException) -> str:
-    text = " ".join(str(exc).split())
-    return (text if isinstance(exc, _PairError) else f"{type(exc).__name__}: {text}")[:300]
+def _row_error(exc: BaseException) -> str:
+    """The ``error`` cell of a failed row: :func:`~meshcorr.runtime.messages.one_line`, or a pair's own line."""
+    return str(exc)[:ONE_LINE_LENGTH] if isinstance(exc, _PairError) else one_line(exc)
 
 
 def run_benchmark(dataset_dir, methods: Sequence[str], out_dir, *, n_pairs: int | None = None,
@@ -366,8 +277,8 @@ def run_benchmark(dataset_dir, methods: Sequence[str], out_dir, *, n_pairs: int 
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise ParameterError(f"Cannot create the output folder {out}: {exc.strerror}.") from exc
-    _check_run_settings(out, {"geodesic": geodesic, "random_state": random_state,
-                              "method_options": method_options}, dataset=dataset_identity(dataset))
+    check_run_settings(out, {"geodesic": geodesic, "random_state": random_state,
+                             "method_options": method_options}, dataset=dataset_identity(dataset))
     pairs = stratified_sample(dataset.pairs, n_pairs, random_state)
     csv_path = out / "results.csv"
     rows = read_rows(csv_path)
@@ -381,41 +292,13 @@ def run_benchmark(dataset_dir, methods: Sequence[str], out_dir, *, n_pairs: int 
         todo = [m for m in methods if (source_name, target_name, m) not in done]
         if not todo:
             continue
-        try:
-            source, target, truth, sym = _load_pair(dataset, source_name, target_name)
-            if len(todo) > 1:  # every map scores from the true vertices' rows: solve them once
-                cache.precompute(target, np.concatenate([truth.target] + ([sym.target] if sym else [])))
-        except MeshcorrError as exc:  # a bad pair is recorded, not fatal
-            load_error = _one_line(exc)
-        else:
-            load_error = None
+        pair = _scored_pair(dataset, source_name, target_name, cache, precompute=len(todo) > 1)
         for method in todo:
             label = f"{source_name}-{target_name} {method}"
             if progress is not None:
                 progress(count, total, f"{label}: running")
-            row = {"source": source_name, "target": target_name, "class": shape_class(source_name),
-                   "method": method}
-            start = time.perf_counter()
-            try:
-                if load_error is not None:
-                    raise _PairError(load_error)
-                # fresh Mesh objects: no method may reuse geodesics another one cached on them
-                result = run_method(method, _fresh(source), _fresh(target), random_state=random_state,
-                                    **method_options.get(method, {}))
-                row["seconds"] = time.perf_counter() - start
-                start = time.perf_counter()
-                report = evaluate_map(target, result.map, truth, sym_truth=sym, geodesic=geodesic,
-                                      cache=cache)
-                row["eval_seconds"] = time.perf_counter() - start
-            except (KeyboardInterrupt, MemoryError):
-                raise
-            except Exception as exc:  # noqa: BLE001 - a failing method must not end the run
-                row.update(status="failed", error=_one_line(exc),
-                           seconds=row.get("seconds", time.perf_counter() - start))
-            else:
-                row.update(status="ok", **{k: report.get(k) for k in FIELDS if k in report},
-                           **{f"under_{t}": f for t, f in report["under"].items()})
-                _save_arrays(out, method, source_name, target_name, result.map, report)
+            row = _run_row(pair, source_name, target_name, method, method_options.get(method, {}),
+                           random_state=random_state, geodesic=geodesic, cache=cache, out=out)
             rows.append({key: _cell(row.get(key)) for key in FIELDS})
             _write_rows(csv_path, rows)
             count += 1
@@ -425,6 +308,51 @@ def run_benchmark(dataset_dir, methods: Sequence[str], out_dir, *, n_pairs: int 
                 progress(count, total, f"{label}: {status}")
     wanted = {(s, t, m) for s, t in pairs for m in methods}
     return [r for r in rows if (r["source"], r["target"], r["method"]) in wanted]
+
+
+def _scored_pair(dataset: Dataset, source_name: str, target_name: str, cache: GeodesicCache, *,
+                 precompute: bool):
+    """``(source, target, truth, sym)`` of a pair (:func:`_load_pair`), or the one-line error that prevents it.
+
+    With ``precompute`` (several methods to score), the geodesics from the true
+    target vertices are solved once into ``cache``.
+    """
+    try:
+        source, target, truth, sym = _load_pair(dataset, source_name, target_name)
+        if precompute:  # every map scores from the true vertices' rows: solve them once
+            cache.precompute(target, np.concatenate([truth.target] + ([sym.target] if sym else [])))
+    except MeshcorrError as exc:  # a bad pair is recorded, not fatal
+        return one_line(exc)
+    return source, target, truth, sym
+
+
+def _run_row(pair, source_name: str, target_name: str, method: str, options: dict, *, random_state: int,
+             geodesic: str, cache: GeodesicCache, out: Path) -> dict:
+    """The row of one (pair, method): the map made, scored and saved, or the failure's message.
+
+    ``pair`` is :func:`_scored_pair`'s answer. Values are not yet cells (:func:`_cell`).
+    """
+    row = {"source": source_name, "target": target_name, "class": shape_class(source_name), "method": method}
+    start = time.perf_counter()
+    try:
+        if isinstance(pair, str):
+            raise _PairError(pair)
+        source, target, truth, sym = pair
+        # fresh Mesh objects: no method may reuse geodesics another one cached on them
+        result = run_method(method, _fresh(source), _fresh(target), random_state=random_state, **options)
+        row["seconds"] = time.perf_counter() - start
+        start = time.perf_counter()
+        report = evaluate_map(target, result.map, truth, sym_truth=sym, geodesic=geodesic, cache=cache)
+        row["eval_seconds"] = time.perf_counter() - start
+    except (KeyboardInterrupt, MemoryError):
+        raise
+    except Exception as exc:  # noqa: BLE001 - a failing method must not end the run
+        row.update(status="failed", error=_row_error(exc), seconds=row.get("seconds", time.perf_counter() - start))
+    else:
+        row.update(status="ok", **{k: report.get(k) for k in FIELDS if k in report},
+                   **{f"under_{t}": f for t, f in report["under"].items()})
+        _save_arrays(out, method, source_name, target_name, result.map, report)
+    return row
 
 
 def _fresh(mesh: Mesh) -> Mesh:

@@ -42,7 +42,6 @@ from __future__ import annotations
 
 import csv
 import hashlib
-import inspect
 import io
 import json
 import logging
@@ -62,7 +61,8 @@ from ..errors import OutputError, ParameterError
 from ..io import atomic_write
 from ..spectral.modes import SCALABLE_ABOVE
 from ..core.holes import fills, unfilled
-from ..shapes.prepared import SHAPE_SETTINGS, PreparedShape, shape_settings
+from ..pipeline.settings import SHAPE_SETTINGS, shape_settings
+from ..shapes.prepared import PreparedShape
 
 #: ``progress(done, total, failed, seconds_left)``: called after each finished pair
 #: (``seconds_left`` is None until a pair has finished).
@@ -439,7 +439,7 @@ def _workers_ignore_ctrl_c():
 
 def _split_options(options: dict) -> tuple[dict, dict]:
     """The per-shape settings and the other match options, every value checked before any work."""
-    from ..pipeline.methods import check_options, method_function
+    from ..pipeline.methods import check_options, method_parameters
 
     given = dict(options)
     if "method" in given and given["method"] != "spectral":
@@ -452,8 +452,7 @@ def _split_options(options: dict) -> tuple[dict, dict]:
     settings = shape_settings(**shape)
     settings["fill_holes"] = fills(settings["fill_holes"], partial=given.get("partial"),
                                    bijective=given.get("bijective", False))
-    taken = [key for key in inspect.signature(method_function("spectral")).parameters
-             if key not in ("source", "target")]
+    taken = list(method_parameters("spectral"))
     unknown = sorted(set(given) - set(taken))
     if unknown:
         raise ParameterError(f"Unknown option of meshcorr.batch: {unknown[0]!r} is no option of meshcorr.match "
@@ -490,7 +489,7 @@ def _cache_root(cache) -> Path:
 
 def _prepare_task(path: str, settings: dict, options: dict, cache_root: str | None):
     """Worker: the :class:`PreparedShape` of one mesh file, or the one-line error that prevents it."""
-    from ..shapes.prepared import prepare
+    from ..pipeline.prepare import prepare
 
     try:
         with single_blas_thread():

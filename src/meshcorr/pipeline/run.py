@@ -53,8 +53,8 @@ from ..stages.refine import prefetch_bases, refine_map
 from ..stages.reorder import Configuration, rank_configurations
 from ..stages.shells import shell_refine
 from .methods import applicable_options, run_method
-from .partial import (check_part_not_larger, check_roles, geodesic_rows, invert_part_map, match_part, part_region,
-                      partiality_suspicion)
+from ..stages.part_checks import check_part_not_larger, check_roles, geodesic_rows, partiality_suspicion
+from .partial import invert_part_map, match_part, part_region
 from .settings import REFINE_K, Settings, as_settings, shape_settings
 
 __all__ = ["match", "REFINE_K", "EXTREMITY_STARTS"]

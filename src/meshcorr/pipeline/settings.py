@@ -39,9 +39,9 @@ from ..runtime.memory import parse_memory
 from ..shapes.prepared import SHAPE_SETTING_NAMES
 from ..spectral.modes import MODES, N_SAMPLES, SCALABLE_ABOVE
 from ..stages.anchors import ANCHOR_SCALES
+from ..stages.part_checks import check_partial_options
 from ..stages.reorder import REORDER_MODES
 from .methods import METHOD_NAMES, reject_inapplicable
-from .partial import check_partial_options
 
 __all__ = ["Settings", "SHAPE_SETTINGS", "REFINE_K", "shape_settings", "as_settings"]
 
@@ -231,7 +231,7 @@ class Settings:
             from its default that the method does not use.
         PartialityError
             ``partial`` with options that do not go with it
-            (:func:`meshcorr.pipeline.partial_checks.check_partial_options`).
+            (:func:`meshcorr.stages.part_checks.check_partial_options`).
         """
         check_choice("method", self.method, METHOD_NAMES)
         _check_landmarks_table(self.landmarks)

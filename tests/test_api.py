@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import meshcorr
+from meshcorr.pipeline.settings import REFINE_K
 from meshcorr import Correspondence, Matcher, Settings
 from meshcorr import datasets as ds
 from meshcorr.errors import InputError, ParameterError
@@ -34,16 +35,14 @@ def result(shape, copy_and_truth):
 # ---------------------------------------------------------------- settings
 
 
-def test_settings_cover_every_option_of_match():
-    names = {f.name for f in dataclasses.fields(Settings)}
+def test_match_takes_settings_or_keywords_and_settings_hold_every_default():
     parameters = inspect.signature(meshcorr.match).parameters
-    for name, parameter in parameters.items():
-        if name in ("source", "target", "progress") or (name == "n_landmarks" and "n_samples" in parameters):
-            continue  # inputs, the reporter, and the old name kept only to raise
-        setting = "n_samples" if name == "n_landmarks" else name
-        assert setting in names, name
-        if name != "max_memory":
-            assert getattr(Settings(), setting) == parameter.default, name
+    assert list(parameters)[:3] == ["source", "target", "settings"] and "k" not in parameters
+    assert Settings().k == 6 and Settings().refine_k == REFINE_K
+    with pytest.raises(ParameterError, match="Unknown setting 'n_landmarks'.*now 'n_samples'"):
+        meshcorr.match(None, None, n_landmarks=40)
+    with pytest.raises(ParameterError, match="'k' parameter must be an int <= 10"):
+        meshcorr.match(None, None, Settings(), k=12)
 
 
 def test_options_the_method_does_not_use_raise_naming_them():
@@ -197,15 +196,11 @@ def test_import_meshcorr_exposes_the_submodules():
     assert callable(meshcorr.viz.show) and callable(meshcorr.progress.StderrProgress)
 
 
-def test_landmarks_pass_through_or_say_they_are_not_supported_yet(shape, copy_and_truth):
+def test_landmarks_pass_through_the_settings(shape, copy_and_truth):
     pairs = [(0, int(copy_and_truth[1][0]))]
-    if "landmarks" in inspect.signature(meshcorr.match).parameters:
-        assert Settings(landmarks=pairs).as_dict()["landmarks"] == [list(pairs[0])]
-        result = Matcher(landmarks=pairs, refine=False).fit(shape, copy_and_truth[0])
-        assert result.map[0] == copy_and_truth[1][0]
-    else:
-        with pytest.raises(ParameterError, match="does not take landmarks yet"):
-            Settings(landmarks=pairs)
+    assert Settings(landmarks=pairs).as_dict()["landmarks"] == [list(pairs[0])]
+    result = Matcher(landmarks=pairs, refine=False).fit(shape, copy_and_truth[0])
+    assert result.map[0] == copy_and_truth[1][0]
 
 
 def test_progress_true_without_tqdm_says_how_to_install_it(monkeypatch):

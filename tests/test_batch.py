@@ -448,7 +448,7 @@ def test_consistency_error_paths(shapes, tmp_path):
 
 def test_a_damaged_summary_and_a_partial_target_are_reported(shapes, tmp_path):
     from meshcorr.collection.tasks import mean_error
-    from meshcorr.shapes.prepared import prepare
+    from meshcorr.pipeline.prepare import prepare
 
     paths, _ = shapes
     (tmp_path / "summary.json").write_text("{")

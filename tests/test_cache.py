@@ -12,7 +12,9 @@ from meshcorr import datasets as ds
 from meshcorr.shapes.cache import ShapeCache, as_cache, default_cache_dir
 from meshcorr.cli import main
 from meshcorr.errors import ParameterError, PreparedShapeError
-from meshcorr.shapes.prepared import SHAPE_SETTINGS, PreparedShape, load_mesh, prepare
+from meshcorr.pipeline.prepare import prepare
+from meshcorr.pipeline.settings import SHAPE_SETTINGS
+from meshcorr.shapes.prepared import PreparedShape, load_mesh
 
 
 @pytest.fixture(scope="module")

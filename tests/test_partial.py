@@ -17,8 +17,8 @@ from meshcorr.evaluation.metrics import geodesic_errors
 from meshcorr.core.sampling import farthest_point_sampling
 from meshcorr.core.mesh import as_mesh
 from meshcorr.choice.orientation import orient_outward
-from meshcorr.pipeline.partial import (check_part_not_larger, geodesic_rows, match_part, matched_region,
-                              partiality_suspicion)
+from meshcorr.pipeline.partial import match_part, matched_region
+from meshcorr.stages.part_checks import check_part_not_larger, geodesic_rows, partiality_suspicion
 
 #: Mean geodesic error / sqrt(target area) a partial map must stay under (measured: 0.016-0.03).
 ERROR_TOLERANCE = 0.06

@@ -13,7 +13,9 @@ import meshcorr
 from meshcorr import datasets as ds
 from meshcorr.cli import main
 from meshcorr.errors import ParameterError, PreparedShapeError
-from meshcorr.shapes.prepared import FORMAT_VERSION, SHAPE_SETTINGS, PreparedShape, mesh_digest, prepare
+from meshcorr.pipeline.prepare import prepare
+from meshcorr.pipeline.settings import SHAPE_SETTINGS
+from meshcorr.shapes.prepared import FORMAT_VERSION, PreparedShape, mesh_digest
 
 
 @pytest.fixture(scope="module")
@@ -131,7 +133,7 @@ def test_prepare_checks_its_options(pair, options, message):
 
 
 def test_n_landmarks_was_renamed_n_samples(pair, tmp_path, capsys):
-    with pytest.raises(ParameterError, match="n_landmarks was renamed n_samples.*n_samples=48"):
+    with pytest.raises(ParameterError, match="Unknown setting 'n_landmarks' \\('n_landmarks' is now 'n_samples'\\)"):
         meshcorr.match(*pair, n_landmarks=48)
     shape = ds.creature(resolution=1)
     import trimesh

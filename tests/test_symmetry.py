@@ -18,7 +18,7 @@ from meshcorr.errors import MeshWarning, ParameterError
 from meshcorr.core.mesh import Mesh
 from meshcorr.choice.orientation import orient_outward, orientation_score, vertex_normals
 from meshcorr.stages.reorder import Configuration
-from meshcorr.choice.symmetry import Candidate, candidate_ranks, choose, metric_distortion, right_map_missing
+from meshcorr.choice.symmetry import ConfigurationCandidate as Candidate, candidate_ranks, choose, metric_distortion, right_map_missing
 
 
 def creature(subdivisions: int = 3):

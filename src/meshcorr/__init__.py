@@ -23,7 +23,7 @@ _LAZY = {
     "match": ("pipeline.run", "match"),
     "Matcher": ("pipeline.matcher", "Matcher"),
     "Settings": ("pipeline.settings", "Settings"),
-    "prepare": ("shapes.prepared", "prepare"),
+    "prepare": ("pipeline.prepare", "prepare"),
     "PreparedShape": ("shapes.prepared", "PreparedShape"),
     "batch": ("collection.batch", "batch"),
     "Correspondence": ("maps.result", "Correspondence"),

@@ -70,7 +70,7 @@ from ..runtime.threads import parallel_map
 from .curvature import curvature_disagreement
 from .orientation import orientation_scores
 from ..stages.shells import shell_refine
-from .symmetry import _rounded, metric_distortion
+from .symmetry import metric_distortion, rounded
 
 #: Maps of orientation score below this are set aside when one above exists.
 ORIENTATION_MIN = 0.6
@@ -86,7 +86,12 @@ LANDMARK_RADIUS = 0.05
 
 @dataclass
 class MapCandidate:
-    """One complete candidate map and its scores.
+    """Second round of the map choice: one complete candidate map and its scores.
+
+    The first round (:class:`meshcorr.choice.symmetry.ConfigurationCandidate`)
+    chose among near-tied eigenvector configurations; this one chooses among
+    whole maps (the spectral map, maps started from extremities or landmarks,
+    their repairs and smooth shells) by the energies of the module docstring.
 
     Attributes
     ----------
@@ -114,12 +119,12 @@ class MapCandidate:
     extra: dict = field(default_factory=dict)
 
     def to_dict(self) -> dict:
-        return {"origin": self.origin, "orientation": _rounded(self.orientation, 4),
-                "distortion": _rounded(self.distortion, 5), "curvature": _rounded(self.curvature, 4),
-                "regional_orientation": _rounded(self.regional_orientation, 4),
-                "landmark_error": _rounded(self.landmark_error, 5),
-                "landmarks_kept": _rounded(self.landmarks_kept, 4),
-                **{key: _rounded(value, 5) for key, value in self.extra.items()}}
+        return {"origin": self.origin, "orientation": rounded(self.orientation, 4),
+                "distortion": rounded(self.distortion, 5), "curvature": rounded(self.curvature, 4),
+                "regional_orientation": rounded(self.regional_orientation, 4),
+                "landmark_error": rounded(self.landmark_error, 5),
+                "landmarks_kept": rounded(self.landmarks_kept, 4),
+                **{key: rounded(value, 5) for key, value in self.extra.items()}}
 
 
 def score_candidates(candidates: list[MapCandidate], source, target, source_geodesics, target_geodesics, *,

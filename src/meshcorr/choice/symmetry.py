@@ -57,8 +57,13 @@ WIDE_CANDIDATES = 6
 
 
 @dataclass
-class Candidate:
-    """One near-tied configuration and the scores of its map.
+class ConfigurationCandidate:
+    """First round of the map choice: one near-tied eigenvector configuration and the scores of its aligned map.
+
+    The pipeline aligns each near-tied configuration of step 4 (thin-plate-spline
+    ICP) and scores the map it gives (orientation, curvature, distortion);
+    :func:`choose` keeps one and its alternative. The second round scores
+    whole candidate maps the same way (:class:`meshcorr.choice.selection.MapCandidate`).
 
     Attributes
     ----------
@@ -89,11 +94,11 @@ class Candidate:
     def to_dict(self) -> dict:
         return {"rank": self.rank, **self.configuration.to_dict(),
                 "orientation": round(float(self.orientation), 4),
-                "curvature": _rounded(self.curvature, 4), "distortion": _rounded(self.distortion, 5)}
+                "curvature": rounded(self.curvature, 4), "distortion": rounded(self.distortion, 5)}
 
 
-def _rounded(value: float, digits: int) -> float | None:
-    """``value`` rounded for JSON; None when it was not measured (NaN)."""
+def rounded(value: float, digits: int) -> float | None:
+    """``value`` rounded to ``digits`` for JSON summaries of candidates; None when it was not measured (NaN)."""
     return None if not np.isfinite(value) else round(float(value), digits)
 
 
@@ -127,7 +132,7 @@ def candidate_ranks(configurations: list[Configuration], *, tolerance: float = 0
     return ranks[:max(max_candidates, 2)]
 
 
-def right_map_missing(candidates: list[Candidate], *, ratio: float = WIDEN_RATIO) -> bool:
+def right_map_missing(candidates: list[ConfigurationCandidate], *, ratio: float = WIDEN_RATIO) -> bool:
     """Whether the near-tied set seems to lack the right map's configuration.
 
     The left/right mirror of the right map agrees with the target's curvature
@@ -143,7 +148,7 @@ def right_map_missing(candidates: list[Candidate], *, ratio: float = WIDEN_RATIO
 
     Parameters
     ----------
-    candidates : list of Candidate
+    candidates : list of ConfigurationCandidate
         Scored, with a reliable orientation.
     ratio : float
         Widen when min curvature (preserving) > ``ratio`` x min curvature (reversing).
@@ -189,13 +194,13 @@ def metric_distortion(source_geodesics: Callable[[int], np.ndarray],
     return total / max(1, len(sources))
 
 
-def choose(candidates: list[Candidate], symmetry: str = "auto", *,
-           orientation_reliable: bool = True) -> tuple[Candidate, Candidate | None]:
+def choose(candidates: list[ConfigurationCandidate], symmetry: str = "auto", *,
+           orientation_reliable: bool = True) -> tuple[ConfigurationCandidate, ConfigurationCandidate | None]:
     """Pick the map and its alternative among scored candidates.
 
     Parameters
     ----------
-    candidates : list of Candidate
+    candidates : list of ConfigurationCandidate
         In rank order (``candidates[0]`` is the cheapest configuration).
     symmetry : {"auto", "cost", "mirror"}
         ``"auto"``: among the orientation-preserving candidates (score >=
@@ -211,8 +216,8 @@ def choose(candidates: list[Candidate], symmetry: str = "auto", *,
 
     Returns
     -------
-    chosen : Candidate
-    alternative : Candidate or None
+    chosen : ConfigurationCandidate
+    alternative : ConfigurationCandidate or None
         The best candidate (same criterion) of the orientation opposite to
         the chosen one's (for ``"cost"``: to the cheapest one's); None with a
         single candidate.
@@ -225,7 +230,7 @@ def choose(candidates: list[Candidate], symmetry: str = "auto", *,
     def best(pool):
         return min(pool, key=lambda c: (getattr(c, criterion), c.rank)) if pool else None
 
-    def opposite(of: Candidate) -> Candidate | None:
+    def opposite(of: ConfigurationCandidate) -> ConfigurationCandidate | None:
         rest = [c for c in candidates if c is not of]
         if not orientation_reliable:
             return best(rest)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import os
 import sys
@@ -13,13 +14,16 @@ import numpy as np
 from ..baselines import METHODS, SPATIAL_METHODS
 from ..errors import InputError, LandmarkError, ParameterError
 from ..core.geodesics import GEODESIC_METHODS
-from ..spectral.modes import MODES, N_SAMPLES, SCALABLE_ABOVE
-from ..pipeline.run import REFINE_K
+from ..spectral.modes import MODES
+from ..pipeline.settings import Settings
 from ..stages.reorder import REORDER_MODES
 from ._mapfile import print_map
 from ._progress import StageProgress
 
 HELP = "compute the vertex map from SOURCE to TARGET"
+
+#: Every option's default (the one source: :class:`meshcorr.Settings`).
+DEFAULTS = Settings()
 
 DESCRIPTION = """\
 Compute a dense vertex-to-vertex map from SOURCE to TARGET with the spectral
@@ -62,39 +66,41 @@ def add_parser(sub) -> None:
                    help="where to write the map (.txt: one index per line; .npy: NumPy array; "
                         "'-': text on stdout); may be left out with --json")
     g = p.add_argument_group("method")
-    g.add_argument("--method", choices=tuple(METHODS), default="spectral",
-                   help="the spectral method or one of the paper's baselines (default: spectral; "
+    g.add_argument("--method", choices=tuple(METHODS), default=DEFAULTS.method,
+                   help=f"the spectral method or one of the paper's baselines (default: {DEFAULTS.method}; "
                         "see above for the options each uses)")
     g.add_argument("--no-prealign", dest="prealign", action="store_false",
                    help=f"do not centre, scale and rotate the inputs to their principal axes "
                         f"before a spatial method ({', '.join(SPATIAL_METHODS)})")
-    g.add_argument("-k", type=int, default=6,
+    g.add_argument("-k", type=int, default=DEFAULTS.k,
                    help="eigenpairs computed, 2 to 10; the embedding has k-1 dimensions "
-                        "(default: 6, the paper's)")
-    g.add_argument("--geodesic", choices=GEODESIC_METHODS, default="heat",
+                        f"(default: {DEFAULTS.k}, the paper's)")
+    g.add_argument("--geodesic", choices=GEODESIC_METHODS, default=DEFAULTS.geodesic,
                    help="geodesic solver: heat method, fast marching, exact MMP (needs "
-                        "meshcorr[exact]) or edge Dijkstra (default: heat)")
-    g.add_argument("--reorder", choices=REORDER_MODES, default="exhaustive",
-                   help="eigenvector reordering and sign correction (default: exhaustive)")
+                        f"meshcorr[exact]) or edge Dijkstra (default: {DEFAULTS.geodesic})")
+    g.add_argument("--reorder", choices=REORDER_MODES, default=DEFAULTS.reorder,
+                   help=f"eigenvector reordering and sign correction (default: {DEFAULTS.reorder})")
     g.add_argument("--no-eigenvalue-scaling", dest="scale_eigenvalues", action="store_false",
                    help="use plain eigenvectors instead of scaling them by sqrt(eigenvalue)")
-    g.add_argument("--icp-iterations", type=int, default=10,
-                   help="most thin-plate-spline ICP iterations; 0 skips the alignment (default: 10)")
-    g.add_argument("--control-points", type=int, default=500, dest="n_control", metavar="N",
-                   help="control points of each thin-plate-spline fit (default: 500)")
-    g.add_argument("--anneal", type=float, default=0.5,
-                   help="factor by which the TPS smoothing shrinks each ICP iteration (default: 0.5)")
-    g.add_argument("--anchors", type=int, default=3, dest="n_anchors",
-                   help="anchor pairs h for proximity-aided matching; 0 disables it (default: 3)")
-    g.add_argument("--alpha", type=float, default=1.0, dest="anchor_weight",
-                   help="weight of each anchor's geodesic term (default: 1)")
+    g.add_argument("--icp-iterations", type=int, default=DEFAULTS.icp_iterations,
+                   help="most thin-plate-spline ICP iterations; 0 skips the alignment "
+                        f"(default: {DEFAULTS.icp_iterations})")
+    g.add_argument("--control-points", type=int, default=DEFAULTS.n_control, dest="n_control", metavar="N",
+                   help=f"control points of each thin-plate-spline fit (default: {DEFAULTS.n_control})")
+    g.add_argument("--anneal", type=float, default=DEFAULTS.anneal,
+                   help=f"factor by which the TPS smoothing shrinks each ICP iteration (default: {DEFAULTS.anneal:g})")
+    g.add_argument("--anchors", type=int, default=DEFAULTS.n_anchors, dest="n_anchors",
+                   help=f"anchor pairs h for proximity-aided matching; 0 disables it (default: {DEFAULTS.n_anchors})")
+    g.add_argument("--alpha", type=float, default=DEFAULTS.anchor_weight, dest="anchor_weight",
+                   help=f"weight of each anchor's geodesic term (default: {DEFAULTS.anchor_weight:g})")
     g.add_argument("--bijective", action="store_true",
                    help="one-to-one map by linear assignment (needs equal vertex counts)")
     g.add_argument("--largest-component", action="store_true",
                    help="map only the largest connected component of each mesh instead of "
                         "failing on meshes with several components")
-    g.add_argument("--seed", type=seed, default=0, help="random seed, an integer >= 0 (default: 0)")
-    g.add_argument("--symmetry", choices=("auto", "cost", "mirror"), default="auto",
+    g.add_argument("--seed", type=seed, default=DEFAULTS.random_state,
+                   help=f"random seed, an integer >= 0 (default: {DEFAULTS.random_state})")
+    g.add_argument("--symmetry", choices=("auto", "cost", "mirror"), default=DEFAULTS.symmetry,
                    help="choice among near-tied eigenvector configurations: auto keeps the "
                         "orientation-preserving map whose curvature agrees best, then makes the whole-map "
                         "choice with the extremities and --landmarks (resolves the left/right mirror and "
@@ -102,10 +108,10 @@ def add_parser(sub) -> None:
                         "the configuration of the other orientation than auto's (the same map as cost when "
                         "that is the cheapest). cost and mirror skip the whole-map choice and do not go "
                         "with --landmarks (default: auto)")
-    g.add_argument("--refine", action=argparse.BooleanOptionalAction, default=True,
+    g.add_argument("--refine", action=argparse.BooleanOptionalAction, default=DEFAULTS.refine,
                    help="refine the map by ZoomOut spectral upsampling (default: on)")
-    g.add_argument("--refine-k", type=int, default=REFINE_K, metavar="K",
-                   help=f"Laplace-Beltrami basis size the refinement ends with (default: {REFINE_K})")
+    g.add_argument("--refine-k", type=int, default=DEFAULTS.refine_k, metavar="K",
+                   help=f"Laplace-Beltrami basis size the refinement ends with (default: {DEFAULTS.refine_k})")
     g.add_argument("--landmarks", metavar="FILE", dest="landmarks_file",
                    help="vertices known to correspond: one 'source_index target_index' pair a line, "
                         "0-based; they settle the left/right choice and are mapped exactly "
@@ -113,7 +119,7 @@ def add_parser(sub) -> None:
     g.add_argument("--landmarks-vts", nargs=2, metavar=("SOURCE.vts", "TARGET.vts"),
                    help="landmarks as a TOSCA-style .vts pair instead: line k of each file is the "
                         "1-based vertex of landmark k on that mesh")
-    g.add_argument("--shells", action=argparse.BooleanOptionalAction, default=True,
+    g.add_argument("--shells", action=argparse.BooleanOptionalAction, default=DEFAULTS.shells,
                    help="after the refinement, align the shapes' smooth shells (a rigid motion and a smooth "
                         "deformation) and map in that space and the spectral one; meshes only (default: on)")
     g.add_argument("--no-extremities", dest="extremities", action="store_false",
@@ -123,29 +129,29 @@ def add_parser(sub) -> None:
                    help="also start maps from the matched tips by an orientation-preserving fit: better "
                         "for people standing (head, hands and feet in one plane cannot tell front from "
                         "back), worse across species (default: off)")
-    g.add_argument("--partial", choices=("source", "target"), default=None,
+    g.add_argument("--partial", choices=("source", "target"), default=DEFAULTS.partial,
                    help="SOURCE is a part of TARGET (one side of a scan, a cut, large holes), or the reverse: "
                         "the map covers the part only (with 'target', SOURCE vertices outside the matched "
                         "region get -1) and --json reports the matched region of the whole shape "
                         "(default: both are whole)")
-    g.add_argument("--fill-holes", action=argparse.BooleanOptionalAction, default=True,
+    g.add_argument("--fill-holes", action=argparse.BooleanOptionalAction, default=DEFAULTS.fill_holes,
                    help="close each hole of the meshes (a boundary loop) by a fan of triangles before "
                         "matching; the map covers the input's vertices only. Not with --partial or "
                         "--bijective, which keep the boundary (default: on)")
-    g.add_argument("--anchor-scale", choices=("embedding", "geodesic"), default="embedding",
+    g.add_argument("--anchor-scale", choices=("embedding", "geodesic"), default=DEFAULTS.anchor_scale,
                    help="scale of the anchor term: the embedding's length scale, or geodesics divided "
                         "by the largest one as in the paper (default: embedding)")
     s = p.add_argument_group("scale")
-    s.add_argument("--mode", choices=MODES, default="auto",
+    s.add_argument("--mode", choices=MODES, default=DEFAULTS.mode,
                    help="dense: all-pairs geodesics and exact eigenpairs (n x n memory, the reference); "
                         f"scalable: landmark geodesics and the Nystrom extension; auto: dense up to "
-                        f"{SCALABLE_ABOVE} vertices if it fits in --max-memory, else scalable (default: auto)")
-    s.add_argument("--samples", type=int, default=N_SAMPLES, dest="n_samples", metavar="N",
-                   help=f"Nystrom samples (landmark vertices) of the scalable mode (default: {N_SAMPLES})")
-    s.add_argument("--scalable-above", type=int, default=SCALABLE_ABOVE, metavar="N",
+                        f"{DEFAULTS.scalable_above} vertices if it fits in --max-memory, else scalable (default: {DEFAULTS.mode})")
+    s.add_argument("--samples", type=int, default=DEFAULTS.n_samples, dest="n_samples", metavar="N",
+                   help=f"Nystrom samples (landmark vertices) of the scalable mode (default: {DEFAULTS.n_samples})")
+    s.add_argument("--scalable-above", type=int, default=DEFAULTS.scalable_above, metavar="N",
                    help=f"--mode auto: the scalable mode when the larger mesh has more than this many vertices "
-                        f"(default: {SCALABLE_ABOVE})")
-    s.add_argument("--max-memory", metavar="SIZE", default=None,
+                        f"(default: {DEFAULTS.scalable_above})")
+    s.add_argument("--max-memory", metavar="SIZE", default=DEFAULTS.max_memory,
                    help="memory the dense mode may use, e.g. 4GiB or 500MB; larger inputs are refused "
                         "(default: 80%% of the memory available)")
     o = p.add_argument_group("output")
@@ -257,22 +263,19 @@ def run(args) -> int:
 
 
 def _match(args, landmarks):
-    """``meshcorr.match`` with the options of ``meshcorr match``."""
+    """``meshcorr.match`` with the options of ``meshcorr match`` (:func:`settings_of`)."""
     from .. import match
 
-    return match(args.source, args.target, symmetry=args.symmetry, refine=args.refine,
-                 anchor_scale=args.anchor_scale, k=args.k, geodesic=args.geodesic,
-                 scale_eigenvalues=args.scale_eigenvalues, reorder=args.reorder,
-                 icp_iterations=args.icp_iterations, n_control=args.n_control, anneal=args.anneal,
-                 n_anchors=args.n_anchors, anchor_weight=args.anchor_weight, bijective=args.bijective,
-                 largest_component=args.largest_component, random_state=args.seed,
+    return match(args.source, args.target, settings_of(args, landmarks),
                  progress=progress_for(args, f"{os.path.basename(args.source)} -> "
-                                             f"{os.path.basename(args.target)}"),
-                 method=args.method, prealign=args.prealign, mode=args.mode,
-                 n_samples=args.n_samples, max_memory=args.max_memory,
-                 scalable_above=args.scalable_above, refine_k=args.refine_k, shells=args.shells,
-                 landmarks=landmarks, extremities=args.extremities, oriented_starts=args.oriented_starts,
-                 partial=args.partial, fill_holes=args.fill_holes)
+                                             f"{os.path.basename(args.target)}"))
+
+
+def settings_of(args, landmarks) -> Settings:
+    """The :class:`~meshcorr.Settings` of parsed ``meshcorr match`` options (dest = field name; ``--seed``)."""
+    names = [f.name for f in dataclasses.fields(Settings) if f.name not in ("random_state", "landmarks")]
+    return Settings.from_options(**{name: getattr(args, name) for name in names}, random_state=args.seed,
+                                 landmarks=landmarks)
 
 
 def _read_landmarks(args):

@@ -9,14 +9,13 @@ into the same folder knows which maps still hold.
 from __future__ import annotations
 
 import hashlib
-import inspect
 import json
 import os
 from pathlib import Path
 
 from ..core.holes import fills
 from ..errors import ParameterError
-from ..shapes.prepared import SHAPE_SETTINGS, shape_settings
+from ..pipeline.settings import SHAPE_SETTINGS, shape_settings
 
 __all__ = ["cache_root", "jsonable", "split_options", "task_key"]
 
@@ -27,7 +26,7 @@ def split_options(options: dict) -> tuple[dict, dict]:
     Returns
     -------
     settings : dict
-        The settings of a prepared shape (:data:`meshcorr.shapes.prepared.SHAPE_SETTINGS`,
+        The settings of a prepared shape (:data:`meshcorr.pipeline.settings.SHAPE_SETTINGS`,
         defaults filled in, ``fill_holes`` resolved for ``partial`` and ``bijective``).
     options : dict
         The other options of :func:`meshcorr.match`, as given.
@@ -38,7 +37,7 @@ def split_options(options: dict) -> tuple[dict, dict]:
         A method other than the spectral one, user landmarks, an option
         :func:`meshcorr.match` does not take, or a value it refuses.
     """
-    from ..pipeline.methods import check_options, method_function
+    from ..pipeline.methods import check_options, method_parameters
 
     given = dict(options)
     if "method" in given and given["method"] != "spectral":
@@ -51,8 +50,7 @@ def split_options(options: dict) -> tuple[dict, dict]:
     settings = shape_settings(**shape)
     settings["fill_holes"] = fills(settings["fill_holes"], partial=given.get("partial"),
                                    bijective=given.get("bijective", False))
-    taken = [key for key in inspect.signature(method_function("spectral")).parameters
-             if key not in ("source", "target")]
+    taken = list(method_parameters("spectral"))
     unknown = sorted(set(given) - set(taken))
     if unknown:
         raise ParameterError(f"Unknown option of meshcorr.batch: {unknown[0]!r} is no option of meshcorr.match "

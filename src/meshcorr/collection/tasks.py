@@ -27,7 +27,7 @@ __all__ = ["compose_task", "dna_task", "invert_task", "mean_error", "pair_task",
 
 def prepare_task(path: str, settings: dict, options: dict, cache_root: str | None):
     """Worker: the :class:`PreparedShape` of one mesh file, or the one-line error that prevents it."""
-    from ..shapes.prepared import prepare
+    from ..pipeline.prepare import prepare
 
     try:
         with single_blas_thread():

@@ -14,7 +14,7 @@ from ..errors import MeshcorrError, ParameterError
 from ..core.mesh import MeshLike
 from ..runtime.progress import as_progress
 from ..maps.result import Correspondence
-from .settings import Settings, match_keywords
+from .settings import Settings
 
 __all__ = ["Matcher"]
 
@@ -96,10 +96,9 @@ class Matcher:
         from .run import match
 
         settings = self._settings()
-        keywords = match_keywords(settings)
         reporter = as_progress(progress)
         try:
-            result = match(source, target, progress=reporter, **keywords)
+            result = match(source, target, settings, progress=reporter)
         finally:
             if hasattr(reporter, "close"):
                 reporter.close()

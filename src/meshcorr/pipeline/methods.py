@@ -19,6 +19,7 @@ name                      method                                                
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 import inspect
 from typing import Callable
@@ -29,7 +30,7 @@ from ..core.mesh import MeshLike
 from ..runtime.timing import StageProgress
 
 __all__ = ["METHOD_NAMES", "SPATIAL_METHODS", "applicable", "applicable_options", "changed_options",
-           "check_options", "method_function", "method_options", "reject_inapplicable", "run_method"]
+           "check_options", "method_function", "method_options", "method_parameters", "reject_inapplicable", "run_method"]
 
 #: Method name -> (module, function) of ``f(source, target, **options) -> Correspondence``.
 _REGISTRY: dict[str, tuple[str, str]] = {
@@ -48,6 +49,11 @@ METHOD_NAMES: tuple[str, ...] = tuple(_REGISTRY)
 SPATIAL_METHODS = ("tps-rpm", "icp", "shape-context")
 
 _RUN_OPTIONS = ("source", "target", "prealign", "random_state", "progress", "method")
+
+#: Methods whose options are the fields of a settings class, not keywords of their function:
+#: method name -> (module, class). The spectral method's ``match(source, target, settings, **overrides)``
+#: takes every field of :class:`meshcorr.Settings` as a keyword.
+_SETTINGS_CLASSES: dict[str, tuple[str, str]] = {"spectral": ("meshcorr.pipeline.settings", "Settings")}
 
 
 def method_function(name: str) -> Callable:
@@ -70,8 +76,22 @@ def method_options(name: str) -> tuple[str, ...]:
     name : str
         One of :data:`METHOD_NAMES`.
     """
-    parameters = inspect.signature(method_function(name)).parameters
-    return tuple(p for p in parameters if p not in _RUN_OPTIONS)
+    return tuple(p for p in method_parameters(name) if p not in _RUN_OPTIONS)
+
+
+def method_parameters(name: str) -> dict:
+    """Every keyword the function of method ``name`` takes besides the shapes, with its default.
+
+    For the baselines, the keywords of their function; for the spectral
+    method, the fields of :class:`meshcorr.Settings` and ``progress`` (its
+    function takes them as keywords).
+    """
+    if check_choice("method", name, METHOD_NAMES) in _SETTINGS_CLASSES:
+        module, cls = _SETTINGS_CLASSES[name]
+        fields = dataclasses.fields(getattr(importlib.import_module(module), cls))
+        return {**{f.name: f.default for f in fields}, "progress": None}
+    return {key: p.default for key, p in inspect.signature(method_function(name)).parameters.items()
+            if key not in ("source", "target")}
 
 
 def applicable_options(name: str, options: dict) -> dict:
@@ -114,19 +134,19 @@ def run_method(name: str, source: MeshLike, target: MeshLike, *, prealign: bool 
     _reject_unknown(name, options, method_options(name))
     if name in SPATIAL_METHODS:
         options["prealign"] = prealign
-    _check_switches(method_function(name), options)
+    _check_switches(name, options)
     return method_function(name)(source, target, random_state=random_state, progress=progress, **options)
 
 
-def _check_switches(function, options: dict) -> None:
+def _check_switches(name: str, options: dict) -> None:
     """Options whose default is True or False must be True or False (:func:`meshcorr.runtime.checks.check_bool`).
 
     The baselines took any value as a switch, so the string ``"false"`` (e.g. from
     ``--set icp:prealign=false``, which is no Python literal) ran as True.
     """
-    parameters = inspect.signature(function).parameters
+    defaults = method_parameters(name)
     for key, value in options.items():
-        if key in parameters and isinstance(parameters[key].default, bool):
+        if key in defaults and isinstance(defaults[key], bool):
             check_bool(key, value)
 
 
@@ -292,14 +312,14 @@ def check_options(name: str, **options) -> None:
         against the vertex count) are left to the run.
     """
     function = method_function(name)
-    parameters = inspect.signature(function).parameters
-    _reject_unknown(name, options, [key for key in parameters if key not in ("source", "target")])
-    _check_switches(function, options)
+    defaults = method_parameters(name)
+    _reject_unknown(name, options, list(defaults))
+    _check_switches(name, options)
     call = dict(options, source=_NoData(), target=_NoData())
     if call.get("progress") is True:  # it passes the checks as False does, without drawing a bar
         call["progress"] = False
     _checks_of(function, **call)
-    given = {key: p.default for key, p in parameters.items() if p.default is not inspect.Parameter.empty}
+    given = {key: default for key, default in defaults.items() if default is not inspect.Parameter.empty}
     given.update(options)
     for module, later, keywords, data in _LATER_CHECKS.get(name, ()):
         _checks_of(getattr(importlib.import_module(module), later), **data(given),

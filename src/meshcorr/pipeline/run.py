@@ -1,15 +1,23 @@
 """The spectral correspondence pipeline of Jain & Zhang (2006), top to bottom.
 
-``match(source, target)`` runs the steps 1-7 of docs/method.md:
+``match(source, target, settings)`` runs the steps of docs/method.md, each a
+call to the stage that does it:
 
-1. all-pairs geodesic distances on each mesh;
-2. Gaussian affinities, sigma = the largest geodesic distance;
-3. spectral embedding: top-k eigenvectors scaled by sqrt(eigenvalue),
-   the first dropped;
-4. eigenvector reordering and sign correction (ranked configurations);
-5. thin-plate-spline ICP in the spectral domain;
-6. anchor selection and proximity-aided matching;
-7. optionally a bijective map by linear assignment.
+1. load: each input as a validated mesh or a checked prepared shape;
+2. spectra (steps 1-3): geodesic distances, Gaussian affinities
+   (sigma = the largest geodesic distance), the top-k eigenvectors scaled
+   by sqrt(eigenvalue), the first dropped;
+3. configurations (step 4): eigenvector reordering and sign correction;
+4. alignment (step 5): thin-plate-spline ICP of each near-tied
+   configuration, scored (the first round of the map choice,
+   :mod:`meshcorr.choice.symmetry`);
+5. matching (step 6): anchors and proximity-aided matching;
+6. choice: the whole-map choice (:mod:`meshcorr.choice.whole_map`);
+7. refinement: ZoomOut, the smooth shells, a bijective map (step 7);
+8. result: the :class:`~meshcorr.maps.result.Correspondence`.
+
+The baselines (:mod:`meshcorr.pipeline.methods`) and the partial mode
+(:mod:`meshcorr.pipeline.partial`) are dispatched from :func:`match`.
 
 Reference: V. Jain, H. Zhang, "Robust 3D shape correspondence in the
 spectral domain", Shape Modeling International 2006.
@@ -22,381 +30,278 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..runtime.checks import check_bool, check_choice, check_float, check_int, check_seed
-from ..runtime.threads import parallel_map
-from ..stages.anchors import EXACT_PAIRS, anchor_descriptors, embedding_neighbours, proximity_matching, select_anchors
-from ..stages.bijection import check_fixed_pairs, nearest_bijection
 from ..choice.curvature import curvature_disagreement
-from ..errors import MeshWarning, ParameterError, PartialShapeWarning
-from ..choice.extremities import match_extremities, spectrum_extremities
-from ..stages.icp import tps_icp
-from ..stages.landmarks import check_landmarks, landmark_descriptors, landmark_map
-from ..core.mesh import Mesh, MeshLike
-from .methods import METHOD_NAMES, applicable_options, changed_options, reject_inapplicable, run_method
-from ..spectral.modes import MODES, N_SAMPLES, SCALABLE_ABOVE, resolve_memory, select_mode
 from ..choice.orientation import mesh_orientation, orientation_score
-from ..choice.oriented_start import fit_oriented_map
-from .partial import (check_part_not_larger, check_partial_options, check_roles, geodesic_rows, invert_part_map,
-                      match_part, part_region, partiality_suspicion)
-from ..core.holes import fills, restrict, unfilled
-from ..shapes.prepared import REFINE_K, PreparedShape, as_meshes, pair_shapes, pair_spectrum, shape_settings
-from ..runtime.progress import as_progress
-from ..stages.refine import prefetch_bases, refine_map
-from ..stages.reorder import REORDER_MODES, Configuration, rank_configurations
+from ..choice.symmetry import (WIDE_CANDIDATES, ConfigurationCandidate, candidate_ranks, choose, metric_distortion,
+                               right_map_missing)
+from ..choice.whole_map import EXTREMITY_STARTS, WholeMapChoice, whole_map_choice
+from ..core.holes import restrict, unfilled
+from ..core.mesh import Mesh, MeshLike
+from ..errors import MeshWarning, ParameterError, PartialShapeWarning
 from ..maps.result import Correspondence
-from ..choice.repair import repair_candidates
-from ..choice.selection import MapCandidate, candidate_summaries, choose_map, score_candidates, shell_candidates
-from ..stages.shells import shell_refine
-from ..choice.symmetry import (SYMMETRY_MODES, WIDE_CANDIDATES, Candidate, candidate_ranks, choose, metric_distortion,
-                       right_map_missing)
+from ..runtime.progress import as_progress
+from ..runtime.threads import parallel_map
 from ..runtime.timing import StageProgress, StageTimer
+from ..shapes.prepared import PreparedShape, as_meshes, pair_shapes, pair_spectrum
+from ..spectral.modes import resolve_memory, select_mode
+from ..stages.anchors import (EXACT_PAIRS, anchor_descriptors, embedding_neighbours, embedding_spread,
+                              proximity_matching, select_anchors)
+from ..stages.bijection import check_fixed_pairs, nearest_bijection
+from ..stages.icp import tps_icp
+from ..stages.landmarks import check_landmarks, landmark_descriptors
+from ..stages.refine import prefetch_bases, refine_map
+from ..stages.reorder import Configuration, rank_configurations
+from ..stages.shells import shell_refine
+from .methods import applicable_options, run_method
+from ..stages.part_checks import check_part_not_larger, check_roles, geodesic_rows, partiality_suspicion
+from .partial import invert_part_map, match_part, part_region
+from .settings import REFINE_K, Settings, as_settings, shape_settings
 
-#: How a tip assignment becomes a dense map: "distances" (meshcorr.stages.landmarks) or "oriented"
-#: (meshcorr.choice.oriented_start, when the orientation is reliable); the first is named
-#: "extremities-<rank>", others get their name appended. benchmarks/selection_study.py runs both:
-#: "oriented" alone was better on TOSCA and SHREC'07 humans and much worse on gorilla -> human
-#: (benchmarks/RESULTS-robustness-trials.md), so the default stays "distances".
-EXTREMITY_STARTS: tuple[str, ...] = ("distances",)
-from ..stages.tps import mean_pairwise_distance
+__all__ = ["match", "REFINE_K", "EXTREMITY_STARTS"]
 
 #: Geodesic rows sampled on the source for the metric distortion of a candidate
 #: (measured only when the orientation is unreliable).
 N_DISTORTION_SOURCES = 16
-ANCHOR_SCALES = ("embedding", "geodesic")
-#: Default of a renamed keyword: passing it raises a ParameterError naming the new one.
-_RENAMED = object()
 
 
-def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, *, k: int = 6,
-          geodesic: str = "heat",
-          scale_eigenvalues: bool = True, reorder: str = "exhaustive", icp_iterations: int = 10,
-          n_control: int = 500, anneal: float = 0.5, n_anchors: int = 3, anchor_weight: float = 1.0,
-          bijective: bool = False, largest_component: bool = False, random_state: int | None = 0,
-          progress: StageProgress | None = None, mode: str = "auto", n_samples: int = N_SAMPLES,
-          max_memory: int | str | None = None, scalable_above: int = SCALABLE_ABOVE,
-          method: str = "spectral", prealign: bool = True,
-          symmetry: str = "auto", refine: bool = True, refine_k: int = REFINE_K, shells: bool = True,
-          anchor_scale: str = "embedding", landmarks=None, extremities: bool = True,
-          oriented_starts: bool = False, partial: str | None = None, fill_holes: bool = True,
-          n_landmarks=_RENAMED) -> Correspondence:
+def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, settings: Settings | None = None, *,
+          progress: StageProgress | bool | None = None, **overrides) -> Correspondence:
     """Dense vertex correspondence from ``source`` to ``target``.
 
     Parameters
     ----------
     source, target : path, trimesh.Trimesh, Mesh, (vertices, faces) or PreparedShape
         Triangle meshes: closed or open 2-manifolds, one connected component
-        each (see ``largest_component``). Any pose, position, rotation,
-        uniform scale and vertex count. A shape from :func:`meshcorr.prepare`
-        skips the per-shape work and gives the same map as its mesh; it must
-        have been prepared with this call's ``k``, ``geodesic``,
-        ``scale_eigenvalues``, ``n_samples``, ``refine``, ``refine_k``,
-        ``largest_component``, ``random_state``, ``fill_holes`` (as this
-        call uses it: False with ``partial`` or ``bijective``) and the pair's mode.
-    k : int
-        Eigenpairs computed; the embedding has ``k - 1`` dimensions (paper: 6).
-    geodesic : {"heat", "fmm", "exact", "dijkstra"}
-        Geodesic solver (see :mod:`meshcorr.core.geodesics`).
-    scale_eigenvalues : bool
-        Scale eigenvectors by sqrt(eigenvalue) (the paper's default).
-    reorder : {"exhaustive", "greedy", "signs", "signs-greedy", "none"}
-        Eigenvector reordering and sign correction (see :mod:`meshcorr.stages.reorder`).
-    icp_iterations : int
-        Most thin-plate-spline ICP iterations; 0 skips the alignment.
-    n_control : int
-        Spline control points.
-    anneal : float
-        Factor lowering the spline regulariser each iteration.
-    n_anchors : int
-        h, anchor pairs for proximity-aided matching (0 disables it).
-    anchor_weight : float
-        alpha, weight of each anchor's geodesic term.
-    bijective : bool
-        One-to-one map by linear assignment (equal vertex counts only; each
-        landmark vertex given once): every target vertex exactly once
-        (:mod:`meshcorr.stages.bijection`).
-    largest_component : bool
-        Map only the largest connected component of each mesh instead of
-        raising on several components.
-    random_state : int or None
-        Seed for everything random (eigensolver start, samples).
+        each (see ``largest_component``), or point clouds. Any pose,
+        position, rotation, uniform scale and vertex count. A shape from
+        :func:`meshcorr.prepare` skips the per-shape work and gives the same
+        map as its mesh; it must have been prepared with this call's
+        per-shape settings (:func:`meshcorr.pipeline.settings.shape_settings`:
+        ``k``, ``geodesic``, ``scale_eigenvalues``, ``n_samples``,
+        ``refine``, ``refine_k``, ``largest_component``, ``random_state``,
+        ``fill_holes`` as this call uses it: False with ``partial`` or
+        ``bijective``) and the pair's mode.
+    settings : Settings, optional
+        Every option of the run (default: ``Settings()``); each one's
+        meaning, default and maths are in :class:`meshcorr.Settings`.
     progress : callable or bool, optional
         ``progress(stage, done, total)``, or True for a progress bar
         (:class:`meshcorr.runtime.progress.TqdmProgress`, notebook-aware).
-    mode : {"auto", "dense", "scalable"}
-        "dense": all-pairs geodesics and the exact eigenpairs (``O(n^2)``
-        memory, the reference); "scalable": landmark geodesics and the
-        Nyström extension (``O(n m)``); "auto": dense up to
-        ``scalable_above`` vertices if it fits in ``max_memory``, else
-        scalable (see :mod:`meshcorr.spectral.modes`).
-    n_samples : int
-        m, Nyström samples (landmark vertices) of the scalable mode
-        (formerly ``n_landmarks``, which now raises :class:`ParameterError`).
-    max_memory : int or str, optional
-        Bytes (or a size such as ``"4GiB"``) the dense mode may use; it
-        refuses larger inputs. Default: 80 % of the memory available now.
-    scalable_above : int
-        Vertex count above which "auto" picks the scalable mode.
-    method : {"spectral", "shapiro-brady", "shapiro-brady-scaled", "tps-rpm", "icp", "shape-context"}
-        "spectral" is this pipeline; the others are the paper's baselines
-        (:mod:`meshcorr.baselines`), which take ``k``, ``geodesic``,
-        ``bijective`` and ``largest_component`` where they apply; an option
-        changed from its default that the method does not use raises
-        :class:`ParameterError` naming it (:func:`meshcorr.pipeline.methods.reject_inapplicable`).
-    prealign : bool
-        Pre-align the inputs to their principal axes (spatial baselines only).
-    symmetry : {"auto", "cost", "mirror"}
-        How to choose among near-tied eigenvector configurations (the
-        left/right mirror, :mod:`meshcorr.choice.symmetry`): "auto" keeps the
-        orientation-preserving map whose curvature agrees best, then the
-        whole-map choice (``extremities``, ``landmarks``); "cost" the cheapest
-        configuration (the paper); "mirror" the configuration of the other
-        orientation than "auto"'s (it may be the cheapest, and then the same
-        map as "cost"). "cost" and "mirror" skip the whole-map choice and do
-        not go with ``landmarks`` (:class:`ParameterError`).
-    refine : bool
-        Refine the map by ZoomOut spectral upsampling (:mod:`meshcorr.stages.refine`).
-    refine_k : int
-        Laplace-Beltrami basis size of the refinement.
-    shells : bool
-        After the refinement, align the shapes' smooth shells (their
-        coordinates low-passed to a growing number of Laplace-Beltrami
-        functions) by a rigid motion and a smooth deformation, and map in the
-        product of that space and the spectral one (:mod:`meshcorr.stages.shells`,
-        after Smooth Shells), on a schedule of small steps
-        (:data:`meshcorr.stages.shells.SCALES`). With ``landmarks`` their geodesic
-        distances join that space. Meshes only, with ``refine`` and without
-        ``bijective`` (point clouds and one-to-one maps keep the ZoomOut
-        map); a declared part is aligned with the whole's shells from 16
-        functions on (:mod:`meshcorr.pipeline.partial`, step 6).
-    anchor_scale : {"embedding", "geodesic"}
-        "embedding": the anchor term is expressed in the embedding's length
-        scale (its geodesics times mean embedding distance / (h x mean
-        normalised geodesic distance)), so it is commensurate with the
-        embedding term; "geodesic": geodesics divided by the largest one,
-        as the paper does (docs/method.md, step 6).
-    landmarks : sequence of (source_index, target_index), optional
-        Vertices the user knows to correspond (0-based, input numbering).
-        They start a candidate map of their own, decide among the candidate
-        maps (the one that agrees with them wins: this settles the left/right
-        choice), join the descriptors of the smooth-shell alignment (their
-        geodesic distances) and are mapped exactly (:mod:`meshcorr.choice.selection`).
-    extremities : bool
-        Also try maps started from matched shape extremities
-        (:mod:`meshcorr.choice.extremities`) and keep the map the whole-map energies
-        prefer (:mod:`meshcorr.choice.selection`); needed when the shapes'
-        proportions differ. Used with ``symmetry="auto"``.
-    oriented_starts : bool
-        Also turn each tip assignment into a map by an orientation-preserving
-        functional-map fit (:mod:`meshcorr.choice.oriented_start`), not only by
-        distances to the tips. Distances to tips that lie near one plane (a
-        person standing: head, hands and feet) cannot tell front from back;
-        the fit can. Measured better on people of one species (SHREC'07
-        humans) and worse across species (gorilla -> human: the fit turns a
-        mirrored assignment into a map turned front to back that the energies
-        do not always reject), so it is off by default
-        (``benchmarks/RESULTS-robustness.md``). Needs a reliable orientation.
-    partial : {None, "source", "target"}
-        None: both shapes are whole (they may have small holes).
-        ``"source"``: the source is a part of the target (one side of a scan,
-        a shape cut by a plane or with large holes); ``"target"``: the target
-        is a part of the source. The map then covers the part only (with
-        ``"target"``, source vertices outside the matched region get -1), and
-        ``result.matched_region`` / ``result.matched_area_fraction`` say which
-        region of the whole shape was matched (:mod:`meshcorr.pipeline.partial`; the
-        options of steps 1-7 shape one of its starting maps). A declared part
-        must have a boundary and must not be larger than the whole;
-        ``bijective=True``, a ``symmetry`` other than "auto" and a method
-        other than "spectral" do not go with it (each raises
-        :class:`~meshcorr.errors.PartialityError`). When it is None and one
-        shape has a long open boundary the other lacks,
-        :class:`~meshcorr.errors.PartialShapeWarning` names the mode to use.
-    fill_holes : bool
-        Close the meshes' holes before matching: each simple boundary loop
-        gets a fan of triangles around a new centre vertex, and the map is
-        reported on the input's vertices only (a vertex sent onto a cap goes
-        to the nearest vertex of its hole's rim; :mod:`meshcorr.core.holes`).
-        Holes change geodesics, the Laplace-Beltrami functions and the
-        extremities; closed, a shape with holes maps about as well as
-        without them. Not done with ``partial`` (a part's boundary is its
-        cut) nor with ``bijective`` (the vertex counts must stay).
+    **overrides
+        Single fields of :class:`meshcorr.Settings` (``match(a, b, k=8)``),
+        replacing those of ``settings``.
 
     Returns
     -------
     result : Correspondence
         ``result.map[i]`` is the target vertex of source vertex i.
+
+    Raises
+    ------
+    ParameterError
+        An unknown keyword (``n_landmarks`` names ``n_samples``), a value
+        :class:`meshcorr.Settings` refuses, or one that does not fit the meshes.
     """
-    check_partial_options(partial, method, changed_options(match, locals()))  # PartialityError
-    reject_inapplicable(method, changed_options(match, locals()))  # ParameterError naming unused options
+    settings = as_settings(settings, overrides)
     progress = as_progress(progress)
-    random_state = check_seed(random_state)
-    for name, value in (("bijective", bijective), ("shells", shells), ("extremities", extremities),
-                        ("oriented_starts", oriented_starts), ("prealign", prealign)):
-        check_bool(name, value)
-    if check_choice("method", method, METHOD_NAMES) != "spectral":
-        common = dict(k=k, geodesic=geodesic, bijective=bijective, largest_component=largest_component)
-        source, target = as_meshes(source, target)
-        return run_method(method, source, target, prealign=prealign, random_state=random_state,
-                          progress=progress, **applicable_options(method, common))
-
-    if n_landmarks is not _RENAMED:
-        raise ParameterError(f"n_landmarks was renamed n_samples (the Nyström sample count of the scalable "
-                             f"mode): pass n_samples={n_landmarks!r} instead.")
-    settings = shape_settings(k=k, geodesic=geodesic, scale_eigenvalues=scale_eigenvalues, n_samples=n_samples,
-                              refine=refine, refine_k=refine_k, largest_component=largest_component,
-                              random_state=random_state, fill_holes=fill_holes)
-    settings["fill_holes"] = fills(fill_holes, partial=partial, bijective=bijective)
-    k, n_samples, refine_k = settings["k"], settings["n_samples"], settings["refine_k"]
-    check_choice("reorder", reorder, REORDER_MODES)
-    n_anchors = check_int("n_anchors", n_anchors, minimum=0)
-    anchor_weight = check_float("anchor_weight", anchor_weight, minimum=0.0)
-    check_choice("mode", mode, MODES)
-    max_memory = resolve_memory(max_memory)
-    check_choice("symmetry", symmetry, SYMMETRY_MODES)
-    check_choice("anchor_scale", anchor_scale, ANCHOR_SCALES)
+    if settings.method != "spectral":
+        return _match_baseline(source, target, settings, progress)
     timer = StageTimer(progress)
+    max_memory = resolve_memory(settings.max_memory)
+    shapes, pairs = _load(source, target, settings, timer)
+    if settings.partial is not None:  # a part against the whole: meshcorr.pipeline.partial
+        return _match_partial(shapes, pairs, settings, max_memory, timer)
+    return _match_whole(shapes, pairs, settings, max_memory, timer)
 
+
+def _match_baseline(source, target, settings: Settings, progress) -> Correspondence:
+    """A baseline of the paper (:mod:`meshcorr.pipeline.methods`) with the settings it takes."""
+    common = dict(k=settings.k, geodesic=settings.geodesic, bijective=settings.bijective,
+                  largest_component=settings.largest_component)
+    source, target = as_meshes(source, target)
+    return run_method(settings.method, source, target, prealign=settings.prealign,
+                      random_state=settings.random_state, progress=progress,
+                      **applicable_options(settings.method, common))
+
+
+def _load(source, target, settings: Settings, timer: StageTimer) -> tuple[tuple, np.ndarray | None]:
+    """Step "load": the shapes (meshes, or shapes prepared with these settings) and the landmarks, local numbering."""
     with timer.stage("load"):  # meshes, or shapes prepared with these settings (meshcorr.shapes.prepared)
-        shapes = pair_shapes(source, target, settings)
+        shapes = pair_shapes(source, target, shape_settings(settings))
         src, tgt = as_meshes(*shapes)
-        pairs = check_landmarks(landmarks, src, tgt)
-    if bijective and pairs is not None:  # named in the input's numbering
+        pairs = check_landmarks(settings.landmarks, src, tgt)
+    if settings.bijective and pairs is not None:  # named in the input's numbering
         check_fixed_pairs(np.stack([src.kept[pairs[:, 0]], tgt.kept[pairs[:, 1]]], axis=1))
-    if n_anchors > min(src.n_vertices, tgt.n_vertices):  # each anchor pairs two distinct vertices
+    n_anchors, smaller = settings.n_anchors, min(src.n_vertices, tgt.n_vertices)
+    if n_anchors > smaller:  # each anchor pairs two distinct vertices
         raise ParameterError(f"n_anchors={n_anchors} (--anchors) is more than the smaller shape's "
-                             f"{min(src.n_vertices, tgt.n_vertices)} vertices; the paper's few anchors (3-10) "
+                             f"{smaller} vertices; the paper's few anchors (3-10) "
                              "are what the matching needs.")
-    if pairs is not None and symmetry != "auto":
-        raise ParameterError(f"Landmarks settle the left/right choice in the whole-map choice (symmetry='auto'); "
-                             f"symmetry={symmetry!r} (--symmetry {symmetry}) would set them aside. Keep "
-                             "symmetry='auto' (the default) with landmarks.")
-    if partial is not None:  # a part against the whole: meshcorr.pipeline.partial; the default mode gives one start
-        spectral_options = dict(k=k, geodesic=geodesic, scale_eigenvalues=scale_eigenvalues, reorder=reorder,
-                                icp_iterations=icp_iterations, n_control=n_control, anneal=anneal,
-                                n_anchors=n_anchors, anchor_weight=anchor_weight, anchor_scale=anchor_scale,
-                                largest_component=largest_component, mode=mode, n_samples=n_samples,
-                                max_memory=max_memory, scalable_above=scalable_above, refine=refine,
-                                refine_k=refine_k, shells=shells, random_state=random_state, fill_holes=False)
-        return _match_partial(shapes, pairs, partial, spectral_options, extremities=extremities, timer=timer)
+    return shapes, pairs
 
-    mode = select_mode(mode, src.n_vertices, tgt.n_vertices, max_memory=max_memory,
-                       scalable_above=scalable_above, bijective=bijective)
+
+class _Aligned(NamedTuple):
+    """Steps 1-6 of a pair: spectra, configurations, the chosen and alternative aligned maps."""
+
+    spectra: list
+    configurations: list
+    candidates: list
+    chosen: ConfigurationCandidate
+    other: ConfigurationCandidate | None
+    reliable: bool
+    refine_history: list
+    bases_seconds: float | None
+
+
+def _match_whole(shapes, pairs: np.ndarray | None, settings: Settings, max_memory: int | None,
+                 timer: StageTimer) -> Correspondence:
+    """Two whole shapes: steps 1-7, the whole-map choice, the refinements and the result."""
+    src, tgt = as_meshes(*shapes)
+    mode = select_mode(settings.mode, src.n_vertices, tgt.n_vertices, max_memory=max_memory,
+                       scalable_above=settings.scalable_above, bijective=settings.bijective)
+    aligned = _spectral_maps(shapes, settings, mode, timer)
+    shell_stage = settings.refine and settings.shells and not settings.bijective and not (src.is_cloud or
+                                                                                          tgt.is_cloud)
+    # The landmarks' geodesic distances, a further coordinate of the shells' product space.
+    described = None if pairs is None or not shell_stage else tuple(
+        landmark_descriptors(spectrum.geodesics_from, ends) for spectrum, ends in zip(aligned.spectra, pairs.T))
+    choice = _choose_map(src, tgt, aligned, pairs, settings, shell_stage, described, timer)
+    local_map, other_map, spectral_kept = choice.mapping, choice.other, choice.spectral_kept
+    if shell_stage:
+        with timer.stage("shells"):  # meshcorr.stages.shells: extrinsic alignment of the chosen map
+            if not choice.shelled:
+                local_map = shell_refine(src, tgt, local_map, k=settings.refine_k, landmarks=pairs,
+                                         descriptors=described, orientation=choice.orientation,
+                                         random_state=settings.random_state)
+        spectral_kept = False
+    if settings.bijective:  # an unrefined start of the whole-map choice, or pinned landmarks, are not one-to-one
+        local_map = nearest_bijection(local_map, tgt.vertices, fixed=pairs)
+        other_map = None if other_map is None else nearest_bijection(other_map, tgt.vertices)
+    return _result(src, tgt, aligned, local_map, other_map, choice.summaries, spectral_kept, pairs,
+                   settings, dict(mode=mode, max_memory=max_memory, shells=shell_stage), timer)
+
+
+def _spectral_maps(shapes, settings: Settings, mode: str, timer: StageTimer) -> _Aligned:
+    """Steps 1-6 and the ZoomOut refinement of the chosen map (its bases computed meanwhile)."""
+    src, tgt = as_meshes(*shapes)
+    seed, per_shape = settings.random_state, shape_settings(settings)
     # The refinement's Laplace-Beltrami bases depend on the meshes only: a worker
     # thread computes them while steps 1-7 run (meshcorr.stages.refine.prefetch_bases).
-    with prefetch_bases(src, tgt, refine_k, random_state=random_state, enabled=refine) as bases:
+    with prefetch_bases(src, tgt, settings.refine_k, random_state=seed, enabled=settings.refine) as bases:
         # Steps 1-3: geodesic distances, Gaussian affinities, scaled spectral embedding.
-        spectra = [pair_spectrum(shape, settings, mode, timer) for shape in shapes]
+        spectra = [pair_spectrum(shape, per_shape, mode, timer) for shape in shapes]
         X, Y = spectra[0].embedding, spectra[1].embedding
         suspicion = partiality_suspicion(unfilled(src), unfilled(tgt), spectra[0].max_geodesic,
                                          spectra[1].max_geodesic)
         if suspicion:  # a part given as a whole shape (meshcorr.pipeline.partial)
-            warnings.warn(suspicion, PartialShapeWarning, stacklevel=2)
-
+            warnings.warn(suspicion, PartialShapeWarning, stacklevel=4)
         # Step 4: eigenvector reordering and sign correction.
         with timer.stage("reorder"):
-            configurations = rank_configurations(X, Y, reorder, random_state=random_state)
-
-        # Steps 5-7 for each near-tied configuration; the left/right mirror is
+            configurations = rank_configurations(X, Y, settings.reorder, random_state=seed)
+        # Steps 5-6 for each near-tied configuration; the left/right mirror is
         # resolved by the orientation of each candidate's map (meshcorr.choice.symmetry).
-        options = dict(icp_iterations=icp_iterations, n_control=n_control, anneal=anneal,
-                       n_anchors=n_anchors, anchor_weight=anchor_weight, anchor_scale=anchor_scale,
-                       bijective=bijective, random_state=random_state)
         with timer.stage("symmetry"):
             reliable = mesh_orientation(src).reliable and mesh_orientation(tgt).reliable
-        candidates = _score_candidates(src, tgt, spectra, configurations, timer, options, reliable=reliable)
-        chosen, other = choose(candidates, symmetry, orientation_reliable=reliable)
-        if not reliable and symmetry == "auto" and len(candidates) > 1:
+        candidates = _score_configurations(src, tgt, spectra, configurations, settings, timer, reliable=reliable)
+        chosen, other = choose(candidates, settings.symmetry, orientation_reliable=reliable)
+        if not reliable and settings.symmetry == "auto" and len(candidates) > 1:
             unsure = src if mesh_orientation(src).reason else tgt
             why = f"{unsure.name}: {mesh_orientation(unsure).reason}"
             warnings.warn(f"The left/right orientation cannot be checked: {why}. The map may be the mirror "
                           "image of the right one; compare it with result.alternative_map.", MeshWarning,
-                          stacklevel=2)
+                          stacklevel=4)
         with timer.stage("matching"):
-            spread = embedding_spread(spectra[0]) if anchor_scale == "embedding" and n_anchors > 0 else 1.0
+            use_spread = settings.anchor_scale == "embedding" and settings.n_anchors > 0
+            spread = embedding_spread(spectra[0]) if use_spread else 1.0
             for candidate in (chosen, other):
                 if candidate is not None:
-                    _finish(candidate, X, spectra, spread, **options)
-        if refine:
+                    _anchor_matching(candidate, X, spectra, spread, n_anchors=settings.n_anchors,
+                                     anchor_weight=settings.anchor_weight, anchor_scale=settings.anchor_scale,
+                                     bijective=settings.bijective)
+        if settings.refine:
             with timer.stage("refine"):
                 bases.wait()
     refine_history: list = []
-    if refine:  # the chosen map only: the alternative is kept as proximity matching gave it
+    if settings.refine:  # the chosen map only: the alternative is kept as proximity matching gave it
         with timer.stage("refine"):
-            chosen.mapping, refine_history = refine_map(src, tgt, chosen.mapping, k=refine_k,
-                                                        bijective=bijective, random_state=random_state)
-    # Whole-map choice: the spectral map against maps from matched extremities
-    # and from the user's landmarks, each refined alike (meshcorr.choice.selection).
-    shell_stage = refine and shells and not bijective and not (src.is_cloud or tgt.is_cloud)
-    # The landmarks' geodesic distances, a further coordinate of the shells' product space.
-    described = None if pairs is None or not shell_stage else tuple(
-        landmark_descriptors(spectrum.geodesics_from, ends) for spectrum, ends in zip(spectra, pairs.T))
-    choice = _Choice(chosen.mapping, None if other is None else other.mapping, [])
-    if symmetry == "auto" and (extremities or pairs is not None):  # stages "whole-map" and "shells"
-        choice = _whole_map_choice(
-            src, tgt, spectra, chosen.mapping, choice.other, pairs, extremities=extremities, refine=refine,
-            refine_k=refine_k, bijective=bijective, reliable=reliable, shells=shell_stage, timer=timer,
-            described=described, tip_starts=EXTREMITY_STARTS + (("oriented",) if oriented_starts else ()),
-            random_state=random_state)
-    local_map, other_map, map_candidates = choice.mapping, choice.other, choice.summaries
-    spectral_kept = choice.spectral_kept
-    if shell_stage:
-        with timer.stage("shells"):  # meshcorr.stages.shells: extrinsic alignment of the chosen map
-            if not choice.shelled:
-                local_map = shell_refine(src, tgt, local_map, k=refine_k, landmarks=pairs, descriptors=described,
-                                         orientation=choice.orientation, random_state=random_state)
-        spectral_kept = False
-    if bijective:  # an unrefined start of the whole-map choice, or pinned landmarks, are not one-to-one
-        local_map = nearest_bijection(local_map, tgt.vertices, fixed=pairs)
-        other_map = None if other_map is None else nearest_bijection(other_map, tgt.vertices)
-    icp, anchors = chosen.extra["icp"], chosen.extra["anchors"]
+            chosen.mapping, refine_history = refine_map(src, tgt, chosen.mapping, k=settings.refine_k,
+                                                        bijective=settings.bijective, random_state=seed)
+    return _Aligned(spectra, configurations, candidates, chosen, other, reliable, refine_history, bases.seconds)
 
+
+def _choose_map(src: Mesh, tgt: Mesh, aligned: _Aligned, pairs: np.ndarray | None, settings: Settings,
+                shell_stage: bool, described, timer: StageTimer) -> WholeMapChoice:
+    """The whole-map choice (stages "whole-map" and "shells"), or the spectral map when it does not run."""
+    chosen, other = aligned.chosen, aligned.other
+    choice = WholeMapChoice(chosen.mapping, None if other is None else other.mapping, [])
+    if settings.symmetry == "auto" and (settings.extremities or pairs is not None):
+        starts = EXTREMITY_STARTS + (("oriented",) if settings.oriented_starts else ())
+        choice = whole_map_choice(
+            src, tgt, aligned.spectra, chosen.mapping, choice.other, pairs, extremities=settings.extremities,
+            refine=settings.refine, refine_k=settings.refine_k, bijective=settings.bijective,
+            reliable=aligned.reliable, shells=shell_stage, timer=timer, described=described, tip_starts=starts,
+            random_state=settings.random_state)
+    return choice
+
+
+def _result(src: Mesh, tgt: Mesh, aligned: _Aligned, local_map: np.ndarray, other_map: np.ndarray | None,
+            map_candidates: list, spectral_kept: bool, pairs: np.ndarray | None, settings: Settings,
+            resolved: dict, timer: StageTimer) -> Correspondence:
+    """The Correspondence of a whole-to-whole run, in the input numbering, without the holes' caps."""
+    chosen, other, spectra = aligned.chosen, aligned.other, aligned.spectra
+    icp, anchors = chosen.extra["icp"], chosen.extra["anchors"]
     full_map = np.full(src.n_original, -1, dtype=np.int64)
     full_map[src.kept] = tgt.kept[local_map]
     full_cost = None  # the matching cost means something only for the unrefined spectral map
-    if not refine and spectral_kept:
+    if not settings.refine and spectral_kept:
         full_cost = np.full(src.n_original, np.nan)
         full_cost[src.kept] = chosen.extra["cost"]
     alternative_map = None
     if other_map is not None:
         alternative_map = np.full(src.n_original, -1, dtype=np.int64)
         alternative_map[src.kept] = tgt.kept[other_map]
-    summaries = [dict(c.to_dict(), chosen=c is chosen, alternative=c is other) for c in candidates]
-    Y_configured = chosen.configuration.apply(Y)
-    params = dict(k=k, geodesic=geodesic, scale_eigenvalues=scale_eigenvalues, reorder=reorder,
-                  icp_iterations=icp_iterations, n_control=n_control, anneal=anneal,
-                  n_anchors=n_anchors, anchor_weight=anchor_weight, bijective=bijective,
-                  largest_component=largest_component, random_state=random_state, mode=mode,
-                  n_samples=n_samples, max_memory=max_memory, symmetry=symmetry, refine=refine,
-                  refine_k=refine_k, shells=shell_stage, anchor_scale=anchor_scale, extremities=extremities,
-                  oriented_starts=oriented_starts, fill_holes=settings["fill_holes"],  # as they ran
-                  landmarks=None if pairs is None else np.stack([src.kept[pairs[:, 0]], tgt.kept[pairs[:, 1]]],
-                                                                axis=1).tolist())
+    summaries = [dict(c.to_dict(), chosen=c is chosen, alternative=c is other) for c in aligned.candidates]
+    landmarks = None if pairs is None else np.stack([src.kept[pairs[:, 0]], tgt.kept[pairs[:, 1]]], axis=1).tolist()
     return restrict(Correspondence(  # without the holes' caps (meshcorr.core.holes)
         map=full_map, cost=full_cost, source=src, target=tgt,
         source_vertices=src.kept.copy(), target_vertices=tgt.kept.copy(),
-        source_embedding=X, target_embedding=Y_configured, aligned_target_embedding=icp.warped,
-        eigenvalues={"source": spectra[0].eigenvalues, "target": spectra[1].eigenvalues}, configuration=chosen.configuration,
-        alternatives=_chosen_first(configurations, chosen, other),
+        source_embedding=spectra[0].embedding, target_embedding=chosen.configuration.apply(spectra[1].embedding),
+        aligned_target_embedding=icp.warped,
+        eigenvalues={"source": spectra[0].eigenvalues, "target": spectra[1].eigenvalues},
+        configuration=chosen.configuration, alternatives=_chosen_first(aligned.configurations, chosen, other),
         anchors=np.stack([src.kept[anchors[:, 0]], tgt.kept[anchors[:, 1]]], axis=1),
         icp_history=icp.history, icp_converged=icp.converged, timings=timer.timings,
-        background_timings={} if bases.seconds is None else {"refine_bases": bases.seconds}, params=params,
-        candidates=summaries, alternative_map=alternative_map, orientation_reliable=reliable,
-        refine_history=refine_history, map_candidates=map_candidates,
+        background_timings={} if aligned.bases_seconds is None else {"refine_bases": aligned.bases_seconds},
+        params=_whole_params(settings, resolved, landmarks), candidates=summaries,
+        alternative_map=alternative_map, orientation_reliable=aligned.reliable,
+        refine_history=aligned.refine_history, map_candidates=map_candidates,
     ), src, tgt)
 
 
-def embedding_spread(spectrum) -> float:
-    """:func:`meshcorr.stages.tps.mean_pairwise_distance` of a spectrum's embedding, computed once per spectrum.
+def _whole_params(settings: Settings, resolved: dict, landmarks: list | None) -> dict:
+    """``result.params`` of a whole-to-whole run: the settings as they ran (mode, memory, shells resolved)."""
+    s = settings
+    return dict(k=s.k, geodesic=s.geodesic, scale_eigenvalues=s.scale_eigenvalues, reorder=s.reorder,
+                icp_iterations=s.icp_iterations, n_control=s.n_control, anneal=s.anneal,
+                n_anchors=s.n_anchors, anchor_weight=s.anchor_weight, bijective=s.bijective,
+                largest_component=s.largest_component, random_state=s.random_state, mode=resolved["mode"],
+                n_samples=s.n_samples, max_memory=resolved["max_memory"], symmetry=s.symmetry, refine=s.refine,
+                refine_k=s.refine_k, shells=resolved["shells"], anchor_scale=s.anchor_scale,
+                extremities=s.extremities, oriented_starts=s.oriented_starts,
+                fill_holes=shape_settings(s)["fill_holes"], landmarks=landmarks)  # as they ran
 
-    The anchors' length scale of :func:`_finish` depends on the source shape
-    only (a seeded sample of its embedding), so a prepared shape matched many
-    times measures it once (kept in ``spectrum.memo``; the same value).
-    """
-    if "spread" not in spectrum.memo:
-        spectrum.memo["spread"] = mean_pairwise_distance(spectrum.embedding)
-    return spectrum.memo["spread"]
 
+def _partial_options(settings: Settings, max_memory: int | None) -> dict:
+    """The settings of the partial mode's whole-to-whole start, in the order ``result.params`` lists them."""
+    s = settings
+    return dict(k=s.k, geodesic=s.geodesic, scale_eigenvalues=s.scale_eigenvalues, reorder=s.reorder,
+                icp_iterations=s.icp_iterations, n_control=s.n_control, anneal=s.anneal,
+                n_anchors=s.n_anchors, anchor_weight=s.anchor_weight, anchor_scale=s.anchor_scale,
+                largest_component=s.largest_component, mode=s.mode, n_samples=s.n_samples,
+                max_memory=max_memory, scalable_above=s.scalable_above, refine=s.refine,
+                refine_k=s.refine_k, shells=s.shells, random_state=s.random_state, fill_holes=False)
 
-def _match_partial(shapes, pairs: np.ndarray | None, partial: str, spectral_options: dict, *, extremities: bool,
+def _match_partial(shapes, pairs: np.ndarray | None, settings: Settings, max_memory: int | None,
                    timer: StageTimer) -> Correspondence:
     """A part against the whole shape (:func:`meshcorr.pipeline.partial.match_part`), as a Correspondence.
 
@@ -412,12 +317,11 @@ def _match_partial(shapes, pairs: np.ndarray | None, partial: str, spectral_opti
     turned round (:func:`meshcorr.pipeline.partial.invert_part_map`): source vertices
     outside the matched region get -1.
     """
-    geodesic, refine, refine_k = (spectral_options[key] for key in ("geodesic", "refine", "refine_k"))
-    random_state = spectral_options["random_state"]
+    partial, extremities, options = settings.partial, settings.extremities, _partial_options(settings, max_memory)
     src, tgt = as_meshes(*shapes)
     ordered = shapes if partial == "source" else shapes[::-1]
     part, whole = as_meshes(*ordered)
-    part_rows, whole_rows = geodesic_rows(part, geodesic), geodesic_rows(whole, geodesic)
+    part_rows, whole_rows = geodesic_rows(part, settings.geodesic), geodesic_rows(whole, settings.geodesic)
     check_roles(part, whole, part_rows, whole_rows, role=partial)
     if pairs is not None and partial == "target":
         pairs = pairs[:, ::-1].copy()
@@ -425,15 +329,15 @@ def _match_partial(shapes, pairs: np.ndarray | None, partial: str, spectral_opti
         # The part matched as a whole shape is one start among the others (its warnings, e.g. of
         # partiality, do not apply here). Meshes, not prepared shapes: those keep the part's boundary.
         warnings.simplefilter("ignore", MeshWarning)
-        plain = match(part, whole, extremities=extremities, **dict(spectral_options, fill_holes=True))
+        plain = match(part, whole, Settings(**dict(options, fill_holes=True), extremities=extremities))
     initial = [("whole-to-whole", plain.local_map())]
     if plain.alternative_map is not None:  # input numbering -> the meshes' local numbering
         to_local = np.full(whole.n_original, -1, dtype=np.int64)
         to_local[whole.kept] = np.arange(whole.n_vertices)
         initial.append(("whole-to-whole-alternative", to_local[plain.alternative_map[part.kept]]))
     found = match_part(part, whole, part_rows, whole_rows, landmarks=pairs, extremities=extremities,
-                       initial_maps=initial, refine=refine, refine_k=refine_k, shells=spectral_options["shells"],
-                       random_state=random_state, timer=timer)
+                       initial_maps=initial, refine=settings.refine, refine_k=settings.refine_k,
+                       shells=settings.shells, random_state=settings.random_state, timer=timer)
     check_part_not_larger(part, whole, found.scale, role=partial)
     local_map, other_map = found.mapping, found.alternative
     if partial == "target":
@@ -451,7 +355,7 @@ def _match_partial(shapes, pairs: np.ndarray | None, partial: str, spectral_opti
         full_maps.append(full)
     region = np.zeros(whole.n_original, dtype=bool)
     region[whole.kept[found.region]] = True
-    params = dict(spectral_options, extremities=extremities, symmetry="auto", partial=partial,
+    params = dict(options, extremities=extremities, symmetry="auto", partial=partial,
                   landmarks=None if pairs is None else (pairs if partial == "source" else pairs[:, ::-1]).tolist())
     return Correspondence(
         map=full_maps[0], source=src, target=tgt, source_vertices=src.kept.copy(), target_vertices=tgt.kept.copy(),
@@ -460,98 +364,20 @@ def _match_partial(shapes, pairs: np.ndarray | None, partial: str, spectral_opti
         matched_area_fraction=found.area_fraction)
 
 
-class _Choice(NamedTuple):
-    """What :func:`_whole_map_choice` returns."""
-
-    mapping: np.ndarray  # the chosen local map
-    other: np.ndarray | None  # the least distorted map of the other orientation, else the spectral alternative
-    summaries: list  # every candidate's scores (MapCandidate.to_dict, chosen, alternative)
-    spectral_kept: bool = True  # the chosen map is the spectral map unchanged (no other candidate, no pin)
-    shelled: bool = False  # the candidates were judged after meshcorr.stages.shells: the chosen map is final
-    orientation: float | None = None  # the chosen map's orientation score, when it is that exact map's
-
-
-def _whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, spectral_other,
-                      pairs: np.ndarray | None, *, extremities: bool, refine: bool, refine_k: int,
-                      bijective: bool, reliable: bool, shells: bool, timer: StageTimer,
-                      described: tuple[np.ndarray, np.ndarray] | None = None,
-                      tip_starts: tuple[str, ...] = EXTREMITY_STARTS, random_state) -> _Choice:
-    """Candidate maps from extremities and landmarks, scored with the spectral map; the winner.
-
-    With ``shells`` on and a reliable orientation, the choice is made between
-    the maps as the pipeline returns them: each partly mirrored candidate
-    adds its repair (:func:`meshcorr.choice.repair.repair_candidates`), and every
-    candidate that keeps the orientation is refined by the smooth shells
-    (:func:`meshcorr.choice.selection.shell_candidates`) and scored again. A right
-    map whose ZoomOut vertices are scattered locally scores as low as a
-    mirrored one before the shells (TOSCA michael11 -> michael16: 0.59
-    against 0.2-0.58) and above 0.9 after them.
-    """
-    with timer.stage("whole-map"):
-        g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
-        hows = tuple(dict.fromkeys(tip_starts)) if reliable else ("distances",)  # the first is unnamed
-        starts: list[tuple[str, np.ndarray, dict]] = []
-        if pairs is not None:
-            starts.append(("landmarks", landmark_map(g1, g2, pairs), {}))
-        if extremities:
-            tips = [spectrum_extremities(mesh, spectrum, random_state=random_state)
-                    for mesh, spectrum in zip((src, tgt), spectra)]
-            for rank, (energy, assignment) in enumerate(match_extremities(*tips)):
-                for how in hows:
-                    start = (fit_oriented_map(src, tgt, g1, g2, assignment, basis_k=refine_k,
-                                              random_state=random_state) if how == "oriented"
-                             else landmark_map(g1, g2, assignment))
-                    suffix = "" if how == hows[0] else f"-{how}"
-                    starts.append((f"extremities-{rank}{suffix}", start, {"extremity_energy": energy}))
-        candidates = [MapCandidate("spectral", spectral_map)]
-        if spectral_other is not None:  # unrefined: it is kept as the alternative, rarely chosen
-            candidates.append(MapCandidate("spectral-alternative", spectral_other))
-        def refined(start: tuple[str, np.ndarray, dict]) -> np.ndarray:
-            # Only the landmarks' own map is held to them while refined: the others must show
-            # by themselves whether they agree with the landmarks (meshcorr.choice.selection).
-            origin, mapping, _ = start
-            pins = pairs if origin == "landmarks" else None
-            return refine_map(src, tgt, mapping, k=refine_k, bijective=bijective, random_state=random_state,
-                              landmarks=pins)[0] if refine else mapping
-
-        # Independent refinements, mostly BLAS and LAPACK: one thread per core (same maps as a loop).
-        for (origin, _, extra), mapping in zip(starts, parallel_map(refined, starts)):
-            candidates.append(MapCandidate(origin, mapping, extra=extra))
-        score_candidates(candidates, src, tgt, g1, g2, reliable=reliable, landmarks=pairs, random_state=random_state)
-    if shells and reliable:  # judge the maps as they will be returned (module docstrings of these steps)
-        with timer.stage("shells"):
-            scored = dict(reliable=reliable, landmarks=pairs, random_state=random_state)
-            repaired = repair_candidates(candidates, src, tgt, k=refine_k, random_state=random_state)
-            score_candidates(repaired, src, tgt, g1, g2, **scored)
-            candidates += repaired
-            final = shell_candidates(candidates, src, tgt, k=refine_k, landmarks=pairs, descriptors=described,
-                                     random_state=random_state)
-            score_candidates(final, src, tgt, g1, g2, **scored)
-    chosen, alternative = choose_map(candidates, reliable=reliable)
-    mapping = chosen.mapping.copy()
-    if pairs is not None:
-        mapping[pairs[:, 0]] = pairs[:, 1]
-    other = alternative.mapping if alternative is not None else spectral_other
-    summaries = candidate_summaries(candidates, chosen, alternative, reliable=reliable)
-    shelled = bool(chosen.extra.get("shells"))
-    return _Choice(mapping, other, summaries, chosen.origin == "spectral" and pairs is None and not shelled,
-                   shelled, chosen.orientation if pairs is None and np.isfinite(chosen.orientation) else None)
-
-
-def _chosen_first(configurations: list[Configuration], chosen: Candidate,
-                  other: Candidate | None) -> list[Configuration]:
+def _chosen_first(configurations: list[Configuration], chosen: ConfigurationCandidate,
+                  other: ConfigurationCandidate | None) -> list[Configuration]:
     """The ranked configurations with the chosen one first and the alternative second."""
     head = [chosen.configuration] + ([other.configuration] if other is not None else [])
     return head + [c for c in configurations if all(c is not h for h in head)]
 
 
-def _score_candidates(src: Mesh, tgt: Mesh, spectra, configurations: list[Configuration],
-                      timer: StageTimer, options: dict, *, reliable: bool) -> list[Candidate]:
+def _score_configurations(src: Mesh, tgt: Mesh, spectra, configurations: list[Configuration], settings: Settings,
+                          timer: StageTimer, *, reliable: bool) -> list[ConfigurationCandidate]:
     """Align each near-tied configuration and score its map (orientation, curvature).
 
     The scores use each candidate's TPS-ICP nearest-neighbour map: the
     anchors and the refinement only run for the chosen map and its
-    alternative (:func:`_finish`). When the near-tied set seems to lack the
+    alternative (:func:`_anchor_matching`). When the near-tied set seems to lack the
     right map (:func:`meshcorr.choice.symmetry.right_map_missing`), the cheapest
     ``WIDE_CANDIDATES`` configurations are scored. The metric distortion (single-source
     geodesic solves, the costliest score at 100k vertices) is measured only
@@ -559,17 +385,17 @@ def _score_candidates(src: Mesh, tgt: Mesh, spectra, configurations: list[Config
     """
     X, Y = spectra[0].embedding, spectra[1].embedding
     g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
-    seed = options["random_state"]
+    seed = settings.random_state
     rng = np.random.default_rng(seed)
     sources = rng.choice(len(X), size=min(N_DISTORTION_SOURCES, len(X)), replace=False)
     source_rows: dict = {}
 
-    def score(ranks: list[int]) -> list[Candidate]:
+    def score(ranks: list[int]) -> list[ConfigurationCandidate]:
         # The candidates' alignments are independent: one thread per core (meshcorr.runtime.threads).
         with timer.stage("icp"):
-            icps = parallel_map(lambda rank: _align(X, configurations[rank].apply(Y), **options), ranks)
+            icps = parallel_map(lambda rank: _align(X, configurations[rank].apply(Y), settings), ranks)
         with timer.stage("symmetry"):
-            return [Candidate(
+            return [ConfigurationCandidate(
                 rank=rank, configuration=configurations[rank],
                 orientation=orientation_score(src, tgt, icp.matches, random_state=seed),
                 curvature=curvature_disagreement(src, tgt, icp.matches, random_state=seed),
@@ -586,15 +412,14 @@ def _score_candidates(src: Mesh, tgt: Mesh, spectra, configurations: list[Config
     return candidates
 
 
-def _align(X: np.ndarray, Y_configured: np.ndarray, *, icp_iterations: int, n_control: int,
-           anneal: float, random_state, **_):
-    """Step 5: thin-plate-spline ICP of one configured target embedding."""
-    return tps_icp(X, Y_configured, max_iter=icp_iterations, n_control=n_control, anneal=anneal,
-                   random_state=random_state)
+def _align(X: np.ndarray, Y_configured: np.ndarray, settings: Settings):
+    """Step 5: thin-plate-spline ICP of one configured target embedding (``icp_iterations``, ``n_control``, ``anneal``)."""
+    return tps_icp(X, Y_configured, max_iter=settings.icp_iterations, n_control=settings.n_control,
+                   anneal=settings.anneal, random_state=settings.random_state)
 
 
-def _finish(candidate: Candidate, X: np.ndarray, spectra, spread: float, *, n_anchors: int,
-            anchor_weight: float, anchor_scale: str, bijective: bool, **_) -> None:
+def _anchor_matching(candidate: ConfigurationCandidate, X: np.ndarray, spectra, spread: float, *, n_anchors: int,
+                     anchor_weight: float, anchor_scale: str, bijective: bool) -> None:
     """Steps 6-7 for one aligned candidate: anchors, proximity-aided matching.
 
     With ``anchor_scale="embedding"`` the normalised geodesic term is put in

@@ -1,107 +1,192 @@
-"""The settings of a correspondence run, in one documented, validated object.
+"""The settings of a correspondence run: every option, its one default and its checks, in one object.
 
 :class:`Settings` groups every option of :func:`meshcorr.match` by what it
-controls (the method, the spectral pipeline's stages, resources); the
-staged :class:`meshcorr.Matcher` and :func:`meshcorr.match` share it. An
-option changed from its default that the chosen method does not use raises
+controls (the method, the spectral pipeline's stages, resources). It is the
+single source of the options' defaults: :func:`meshcorr.match`,
+:func:`meshcorr.prepare`, :class:`meshcorr.Matcher` and the command line
+(``meshcorr match``) take them from its fields, and a default that a lower
+layer needs itself (:data:`meshcorr.spectral.modes.N_SAMPLES`,
+:data:`~meshcorr.spectral.modes.SCALABLE_ABOVE`) is that layer's constant,
+which the field refers to. A Settings is checked when it is made
+(:meth:`Settings.__post_init__`), once, with one message shape ("The 'k'
+parameter must be an int <= 10. Got 12 instead."): an option changed from
+its default that the chosen method does not use raises
 :class:`~meshcorr.errors.ParameterError` naming it
-(:func:`meshcorr.pipeline.methods.reject_inapplicable`); the values themselves are
-checked by :func:`meshcorr.match` where they are used, with one message
-shape ("The 'k' parameter must be an int <= 10. Got 12 instead.").
+(:func:`meshcorr.pipeline.methods.reject_inapplicable`), a partial-mode
+option that does not go with the others raises
+:class:`~meshcorr.errors.PartialityError`. Checks that need the meshes
+(landmark indices, anchors against the vertex count) are left to the run.
+
+:func:`shape_settings` derives the per-shape subset (:data:`SHAPE_SETTINGS`,
+what :func:`meshcorr.prepare` computes depends on) that prepared shapes and
+the shape cache record.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import inspect
 from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
 
+from ..choice.symmetry import SYMMETRY_MODES
+from ..core.geodesics import GEODESIC_METHODS
+from ..core.holes import fills
 from ..errors import ParameterError
+from ..runtime.checks import check_bool, check_choice, check_float, check_int, check_seed
+from ..runtime.memory import parse_memory
+from ..shapes.prepared import SHAPE_SETTING_NAMES
+from ..spectral.modes import MODES, N_SAMPLES, SCALABLE_ABOVE
+from ..stages.anchors import ANCHOR_SCALES
+from ..stages.part_checks import check_partial_options
+from ..stages.reorder import REORDER_MODES
 from .methods import METHOD_NAMES, reject_inapplicable
-from .run import match as _match
 
-__all__ = ["Settings", "match_keywords"]
+__all__ = ["Settings", "SHAPE_SETTINGS", "REFINE_K", "shape_settings", "as_settings"]
 
-_MATCH_PARAMETERS = inspect.signature(_match).parameters
-
-
-def _match_default(*names: str):
-    """The default of the first of ``names`` that :func:`meshcorr.match` has (one source of truth)."""
-    for name in names:
-        if name in _MATCH_PARAMETERS:
-            return _MATCH_PARAMETERS[name].default
-    raise ImportError(f"meshcorr.match has none of the parameters {names}")  # pragma: no cover
+#: Settings whose value must be True or False (numpy's too), in the order they are checked.
+_SWITCHES = ("bijective", "shells", "extremities", "oriented_starts", "prealign")
+#: The spectral pipeline's switches that only it checks (with :data:`_SWITCHES`).
+_SPECTRAL_SWITCHES = ("scale_eigenvalues", "refine", "largest_component", "fill_holes")
 
 
 @dataclass(frozen=True)
 class Settings:
-    """Options of a correspondence run (see :func:`meshcorr.match` for each one's maths).
+    """Options of a correspondence run, each with its one default and what it does.
+
+    ``Settings()`` holds every default; ``Settings(k=8)`` or
+    ``Settings.from_options(**keywords)`` changes some. It is checked when
+    made (the module docstring): an invalid Settings cannot exist.
 
     Attributes
     ----------
     method : {"spectral", "shapiro-brady", "shapiro-brady-scaled", "tps-rpm", "icp", "shape-context"}
-        The method (:mod:`meshcorr.pipeline.methods`).
+        "spectral" is the pipeline of :func:`meshcorr.match`; the others are
+        the paper's baselines (:mod:`meshcorr.baselines`,
+        :mod:`meshcorr.pipeline.methods`), which take ``k``, ``geodesic``,
+        ``bijective`` and ``largest_component`` where they apply; an option
+        changed from its default that the method does not use raises
+        :class:`ParameterError` naming it (:func:`meshcorr.pipeline.methods.reject_inapplicable`).
     random_state : int or None
-        The one seed of everything random.
+        Seed for everything random (eigensolver start, samples).
     k : int
-        Eigenpairs of the affinity; the embedding has ``k - 1`` dimensions.
+        Eigenpairs computed; the embedding has ``k - 1`` dimensions (paper: 6).
     geodesic : {"heat", "fmm", "exact", "dijkstra"}
-        Geodesic solver.
+        Geodesic solver (see :mod:`meshcorr.core.geodesics`).
     scale_eigenvalues : bool
-        Scale eigenvectors by sqrt(eigenvalue).
+        Scale eigenvectors by sqrt(eigenvalue) (the paper's default).
     reorder : {"exhaustive", "greedy", "signs", "signs-greedy", "none"}
-        Eigenvector reordering and sign correction.
-    icp_iterations, n_control : int
-        Thin-plate-spline ICP: most iterations (0 skips it), control points.
+        Eigenvector reordering and sign correction (see :mod:`meshcorr.stages.reorder`).
+    icp_iterations : int
+        Most thin-plate-spline ICP iterations; 0 skips the alignment.
+    n_control : int
+        Spline control points.
     anneal : float
         Factor lowering the spline regulariser each iteration.
     n_anchors : int
-        h, anchor pairs of the proximity-aided matching.
+        h, anchor pairs for proximity-aided matching (0 disables it).
     anchor_weight : float
         alpha, weight of each anchor's geodesic term.
-    anchor_scale : {"embedding", "geodesic"}
-        Length scale of the anchor term.
+    bijective : bool
+        One-to-one map by linear assignment (equal vertex counts only; each
+        landmark vertex given once): every target vertex exactly once
+        (:mod:`meshcorr.stages.bijection`).
+    largest_component : bool
+        Map only the largest connected component of each mesh instead of
+        raising on several components.
+    mode : {"auto", "dense", "scalable"}
+        "dense": all-pairs geodesics and the exact eigenpairs (``O(n^2)``
+        memory, the reference); "scalable": landmark geodesics and the
+        Nyström extension (``O(n m)``); "auto": dense up to
+        ``scalable_above`` vertices if it fits in ``max_memory``, else
+        scalable (see :mod:`meshcorr.spectral.modes`).
+    n_samples : int
+        m, Nyström samples (landmark vertices) of the scalable mode
+        (formerly ``n_landmarks``, which now raises :class:`ParameterError`
+        naming ``n_samples``).
+    max_memory : int or str, optional
+        Bytes (or a size such as ``"4GiB"``) the dense mode may use; it
+        refuses larger inputs. Default: 80 % of the memory available now.
+    scalable_above : int
+        Vertex count above which "auto" picks the scalable mode.
+    prealign : bool
+        Pre-align the inputs to their principal axes (spatial baselines only).
     symmetry : {"auto", "cost", "mirror"}
-        Choice among near-tied configurations (the left/right mirror).
+        How to choose among near-tied eigenvector configurations (the
+        left/right mirror, :mod:`meshcorr.choice.symmetry`): "auto" keeps the
+        orientation-preserving map whose curvature agrees best, then the
+        whole-map choice (``extremities``, ``landmarks``); "cost" the cheapest
+        configuration (the paper); "mirror" the configuration of the other
+        orientation than "auto"'s (it may be the cheapest, and then the same
+        map as "cost"). "cost" and "mirror" skip the whole-map choice and do
+        not go with ``landmarks`` (:class:`ParameterError`).
     refine : bool
-        ZoomOut refinement of the map.
+        Refine the map by ZoomOut spectral upsampling (:mod:`meshcorr.stages.refine`).
     refine_k : int
         Laplace-Beltrami basis size of the refinement.
     shells : bool
-        Align the shapes' smooth shells after the refinement (:mod:`meshcorr.stages.shells`).
-    landmarks : (p, 2) int or None
-        Known vertex pairs ``(source vertex, target vertex)``, input
-        numbering: they start a candidate map, decide among the candidates
-        and are mapped exactly.
+        After the refinement, align the shapes' smooth shells (their
+        coordinates low-passed to a growing number of Laplace-Beltrami
+        functions) by a rigid motion and a smooth deformation, and map in the
+        product of that space and the spectral one (:mod:`meshcorr.stages.shells`,
+        after Smooth Shells), on a schedule of small steps
+        (:data:`meshcorr.stages.shells.SCALES`). With ``landmarks`` their geodesic
+        distances join that space. Meshes only, with ``refine`` and without
+        ``bijective`` (point clouds and one-to-one maps keep the ZoomOut
+        map); a declared part is aligned with the whole's shells from 16
+        functions on (:mod:`meshcorr.pipeline.partial`, step 6).
+    anchor_scale : {"embedding", "geodesic"}
+        "embedding": the anchor term is expressed in the embedding's length
+        scale (its geodesics times mean embedding distance / (h x mean
+        normalised geodesic distance)), so it is commensurate with the
+        embedding term; "geodesic": geodesics divided by the largest one,
+        as the paper does (docs/method.md, step 6).
+    landmarks : sequence of (source_index, target_index), optional
+        Vertices the user knows to correspond (0-based, input numbering).
+        They start a candidate map of their own, decide among the candidate
+        maps (the one that agrees with them wins: this settles the left/right
+        choice), join the descriptors of the smooth-shell alignment (their
+        geodesic distances) and are mapped exactly (:mod:`meshcorr.choice.selection`).
     extremities : bool
-        Also try maps started from matched shape extremities and keep the
-        one the whole-map energies prefer (with ``symmetry="auto"``).
+        Also try maps started from matched shape extremities
+        (:mod:`meshcorr.choice.extremities`) and keep the map the whole-map energies
+        prefer (:mod:`meshcorr.choice.selection`); needed when the shapes'
+        proportions differ. Used with ``symmetry="auto"``.
     oriented_starts : bool
-        Also start maps from the tips by an orientation-preserving fit
-        (people standing; worse across species).
+        Also turn each tip assignment into a map by an orientation-preserving
+        functional-map fit (:mod:`meshcorr.choice.oriented_start`), not only by
+        distances to the tips. Distances to tips that lie near one plane (a
+        person standing: head, hands and feet) cannot tell front from back;
+        the fit can. Measured better on people of one species (SHREC'07
+        humans) and worse across species (gorilla -> human: the fit turns a
+        mirrored assignment into a map turned front to back that the energies
+        do not always reject), so it is off by default
+        (``benchmarks/RESULTS-robustness.md``). Needs a reliable orientation.
     partial : {None, "source", "target"}
-        Which shape is a part of the other (:mod:`meshcorr.pipeline.partial`); None:
-        both are whole.
+        None: both shapes are whole (they may have small holes).
+        ``"source"``: the source is a part of the target (one side of a scan,
+        a shape cut by a plane or with large holes); ``"target"``: the target
+        is a part of the source. The map then covers the part only (with
+        ``"target"``, source vertices outside the matched region get -1), and
+        ``result.matched_region`` / ``result.matched_area_fraction`` say which
+        region of the whole shape was matched (:mod:`meshcorr.pipeline.partial`; the
+        options of steps 1-7 shape one of its starting maps). A declared part
+        must have a boundary and must not be larger than the whole;
+        ``bijective=True``, a ``symmetry`` other than "auto" and a method
+        other than "spectral" do not go with it (each raises
+        :class:`~meshcorr.errors.PartialityError`). When it is None and one
+        shape has a long open boundary the other lacks,
+        :class:`~meshcorr.errors.PartialShapeWarning` names the mode to use.
     fill_holes : bool
-        Close the meshes' holes before matching (:mod:`meshcorr.core.holes`);
-        not with ``partial`` or ``bijective``.
-    bijective : bool
-        One-to-one map (equal vertex counts only).
-    largest_component : bool
-        Map only each mesh's largest connected component.
-    prealign : bool
-        Pre-align to the principal axes (spatial baselines only).
-    mode : {"auto", "dense", "scalable"}
-        All-pairs geodesics and exact eigenpairs, or samples and Nyström.
-    n_samples : int
-        m, sample vertices of the scalable mode's Nyström extension.
-    max_memory : int, str or None
-        Memory the dense mode may use (bytes or e.g. ``"4GiB"``).
-    scalable_above : int
-        Vertex count above which ``mode="auto"`` picks the scalable mode.
+        Close the meshes' holes before matching: each simple boundary loop
+        gets a fan of triangles around a new centre vertex, and the map is
+        reported on the input's vertices only (a vertex sent onto a cap goes
+        to the nearest vertex of its hole's rim; :mod:`meshcorr.core.holes`).
+        Holes change geodesics, the Laplace-Beltrami functions and the
+        extremities; closed, a shape with holes maps about as well as
+        without them. Not done with ``partial`` (a part's boundary is its
+        cut) nor with ``bijective`` (the vertex counts must stay).
     """
 
     method: str = "spectral"
@@ -119,7 +204,7 @@ class Settings:
     anchor_scale: str = "embedding"
     symmetry: str = "auto"
     refine: bool = True
-    refine_k: int = _match_default("refine_k")
+    refine_k: int = 40
     shells: bool = True
     landmarks: Sequence[tuple[int, int]] | np.ndarray | None = None
     extremities: bool = True
@@ -132,21 +217,54 @@ class Settings:
     prealign: bool = True
     # resources
     mode: str = "auto"
-    n_samples: int = _match_default("n_samples", "n_landmarks")
+    n_samples: int = N_SAMPLES
     max_memory: int | str | None = None
-    scalable_above: int = _match_default("scalable_above")
+    scalable_above: int = SCALABLE_ABOVE
 
     def __post_init__(self) -> None:
-        if self.method not in METHOD_NAMES:
-            options = ", ".join(repr(m) for m in METHOD_NAMES)
-            raise ParameterError(f"The 'method' parameter must be one of {options}. Got {self.method!r} instead.")
-        if self.landmarks is not None:
-            pairs = np.asarray(self.landmarks)
-            if pairs.ndim != 2 or pairs.shape[1] != 2 or not np.issubdtype(pairs.dtype, np.integer):
-                raise ParameterError("The 'landmarks' parameter must be (source vertex, target vertex) integer "
-                                     f"pairs, e.g. [(0, 12), (5, 40)]. Got an array of shape {pairs.shape} "
-                                     f"and dtype {pairs.dtype} instead.")
-        reject_inapplicable(self.method, match_keywords(self))
+        """Check every setting, in the order :func:`meshcorr.match` always has; store the checked values.
+
+        Raises
+        ------
+        ParameterError
+            A value out of range or of the wrong type, or an option changed
+            from its default that the method does not use.
+        PartialityError
+            ``partial`` with options that do not go with it
+            (:func:`meshcorr.stages.part_checks.check_partial_options`).
+        """
+        check_choice("method", self.method, METHOD_NAMES)
+        _check_landmarks_table(self.landmarks)
+        changed = self.changed()
+        check_partial_options(self.partial, self.method, changed)
+        reject_inapplicable(self.method, changed)
+        checked = {"random_state": check_seed(self.random_state)}
+        checked.update((name, check_bool(name, getattr(self, name))) for name in _SWITCHES)
+        if self.method == "spectral":
+            checked.update(self._spectral_values())
+        for name, value in checked.items():
+            object.__setattr__(self, name, value)
+
+    def _spectral_values(self) -> dict:
+        """The checked values of the spectral pipeline's settings (the baselines check their own)."""
+        k = check_int("k", self.k, minimum=2, maximum=10)
+        values = dict(k=k, geodesic=check_choice("geodesic", self.geodesic, GEODESIC_METHODS),
+                      n_samples=check_int("n_samples", self.n_samples, minimum=k + 1))
+        values.update((name, check_bool(name, getattr(self, name))) for name in _SPECTRAL_SWITCHES)
+        values.update(refine_k=check_int("refine_k", self.refine_k, minimum=2),
+                      reorder=check_choice("reorder", self.reorder, REORDER_MODES),
+                      n_anchors=check_int("n_anchors", self.n_anchors, minimum=0),
+                      anchor_weight=check_float("anchor_weight", self.anchor_weight, minimum=0.0),
+                      mode=check_choice("mode", self.mode, MODES))
+        if self.max_memory is not None:
+            parse_memory(self.max_memory)  # a size it cannot read raises here (the run resolves it)
+        check_choice("symmetry", self.symmetry, SYMMETRY_MODES)
+        check_choice("anchor_scale", self.anchor_scale, ANCHOR_SCALES)
+        if _has_pairs(self.landmarks) and self.symmetry != "auto":
+            raise ParameterError(f"Landmarks settle the left/right choice in the whole-map choice "
+                                 f"(symmetry='auto'); symmetry={self.symmetry!r} (--symmetry {self.symmetry}) "
+                                 "would set them aside. Keep symmetry='auto' (the default) with landmarks.")
+        return values
 
     @classmethod
     def from_options(cls, **options) -> "Settings":
@@ -189,18 +307,66 @@ class Settings:
         return out
 
 
-def match_keywords(settings: Settings) -> dict:
-    """The keywords of :func:`meshcorr.match` for ``settings``: the changed ones only.
+#: Laplace-Beltrami basis size of the ZoomOut refinement (:mod:`meshcorr.stages.refine`): the default of ``refine_k``.
+REFINE_K: int = Settings.refine_k
 
-    Maps ``n_samples`` to the name :func:`meshcorr.match` has for it, and
-    refuses ``landmarks`` when this version of :func:`meshcorr.match` does
-    not take them.
+
+def as_settings(settings: Settings | None, overrides: dict) -> Settings:
+    """``settings`` (default: ``Settings()``) with the keywords ``overrides`` replacing single fields, checked.
+
+    Raises
+    ------
+    ParameterError
+        ``settings`` that is no Settings, or an unknown keyword (the message
+        of :meth:`Settings.from_options`, with its ``n_landmarks`` hint), or
+        a value :class:`Settings` refuses.
     """
-    accepted = _MATCH_PARAMETERS
-    keywords = settings.changed()
-    if "n_samples" in keywords and "n_samples" not in accepted:
-        keywords["n_landmarks"] = keywords.pop("n_samples")
-    if "landmarks" in keywords and "landmarks" not in accepted:
-        raise ParameterError("This version of meshcorr.match does not take landmarks yet; remove the "
-                             "'landmarks' setting.")
-    return keywords
+    if settings is None:
+        return Settings.from_options(**overrides)
+    if not isinstance(settings, Settings):
+        raise ParameterError(f"settings must be a meshcorr.Settings (or None); got {type(settings).__name__}. "
+                             "Pass single settings as keywords: match(source, target, k=8, ...).")
+    return settings.replace(**overrides) if overrides else settings
+
+
+def shape_settings(settings: Settings | None = None, **overrides) -> dict:
+    """The per-shape settings of ``settings``: :data:`SHAPE_SETTINGS`' names, as prepared shapes record them.
+
+    What :func:`meshcorr.prepare` computes depends on these alone; the dict
+    is stored in prepared-shape files and is part of the shape cache's keys
+    (:mod:`meshcorr.shapes.cache`), so its keys, order and value types stay
+    as they are. ``fill_holes`` is what the run does: False with
+    ``partial`` or ``bijective`` (:func:`meshcorr.core.holes.fills`).
+    """
+    settings = as_settings(settings, overrides)
+    out = {name: getattr(settings, name) for name in SHAPE_SETTING_NAMES}
+    out["fill_holes"] = fills(settings.fill_holes, partial=settings.partial, bijective=settings.bijective)
+    return out
+
+
+def _has_pairs(landmarks) -> bool:
+    return landmarks is not None and np.asarray(landmarks).size > 0
+
+
+def _check_landmarks_table(landmarks) -> None:
+    """Refuse landmarks that are no table of (source vertex, target vertex) pairs of whole numbers.
+
+    An empty table is no landmarks. The indices are checked against the
+    meshes by the run (:func:`meshcorr.stages.landmarks.check_landmarks`).
+    """
+    if landmarks is None:
+        return
+    try:
+        pairs = np.asarray(landmarks)
+    except (TypeError, ValueError):
+        pairs = np.asarray(None)
+    if pairs.size == 0:
+        return
+    if pairs.ndim != 2 or pairs.shape[1] != 2 or pairs.dtype.kind not in "iuf":
+        raise ParameterError("The 'landmarks' parameter must be (source vertex, target vertex) integer "
+                             f"pairs, e.g. [(0, 12), (5, 40)]. Got an array of shape {pairs.shape} "
+                             f"and dtype {pairs.dtype} instead.")
+
+
+#: The per-shape settings and their defaults (:func:`shape_settings` of ``Settings()``).
+SHAPE_SETTINGS: dict = shape_settings()

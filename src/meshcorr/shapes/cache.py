@@ -24,7 +24,7 @@ from pathlib import Path
 
 from ..errors import ParameterError, PreparedShapeError
 from ..core.mesh import Mesh
-from .prepared import FORMAT_VERSION, PreparedShape, _version, mesh_digest, prepare_mesh
+from .prepared import FORMAT_VERSION, PreparedShape, meshcorr_version, mesh_digest, prepare_mesh
 
 SUFFIX = ".npz"
 #: A cache file's name (the key: 64 hex digits), and a writer's temporary file of one
@@ -58,7 +58,7 @@ class ShapeCache:
 
     def key(self, mesh: Mesh, settings: dict, mode: str) -> str:
         """SHA-256 (hex) of the mesh content, the settings, the mode and the versions."""
-        text = json.dumps(dict(settings, mode=mode, format=FORMAT_VERSION, meshcorr=_version(),
+        text = json.dumps(dict(settings, mode=mode, format=FORMAT_VERSION, meshcorr=meshcorr_version(),
                                mesh=mesh_digest(mesh)), sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()
 

@@ -1,13 +1,13 @@
-"""Prepare a shape once, match it many times: :class:`PreparedShape` and :func:`prepare`.
+"""Prepare a shape once, match it many times: :class:`PreparedShape` (made by :func:`meshcorr.prepare`).
 
 Most of the time of a pair goes into work that depends on one mesh only:
 its geodesic rows and spectral embedding (docs/method.md, steps 1-3), the
 outward orientation and the curvature field that score candidate maps
 (:mod:`meshcorr.choice.orientation`, :mod:`meshcorr.choice.curvature`), and the
 Laplace-Beltrami basis of the refinement (:mod:`meshcorr.stages.refine`).
-:func:`prepare` computes all of it with the very functions
-:func:`meshcorr.match` calls, for the settings that affect it
-(:data:`SHAPE_SETTINGS`), and :func:`meshcorr.match` accepts the result in
+:func:`meshcorr.prepare` (:mod:`meshcorr.pipeline.prepare`) computes all of it with the very
+functions :func:`meshcorr.match` calls, for the settings that affect it
+(:data:`SHAPE_SETTING_NAMES`), and :func:`meshcorr.match` accepts the result in
 place of a mesh: the map is the same, bit for bit, as from the meshes.
 
 Where the data lives
@@ -16,14 +16,14 @@ Where the data lives
     (``Mesh.store``, :mod:`meshcorr.core.store`: ``key tuple -> value``, filled by the cached functions
     of the pipeline, which look there before they compute). A new per-shape
     quantity computed through such a cached function is carried, saved and
-    loaded without any change here; :func:`warm` is where :func:`prepare`
+    loaded without any change here; :func:`warm` is where :func:`meshcorr.prepare`
     asks for it (one line).
 
 File format (:meth:`PreparedShape.save`, version :data:`FORMAT_VERSION`)
     One uncompressed ``.npz`` (NumPy's zip of ``.npy`` arrays, read with
     ``allow_pickle=False``). The array ``header`` holds UTF-8 JSON:
     ``format`` (this version), ``meshcorr`` (the version that wrote it),
-    ``settings`` (:data:`SHAPE_SETTINGS` and the resolved ``mode``),
+    ``settings`` (:data:`SHAPE_SETTING_NAMES` and the resolved ``mode``),
     ``mesh_sha256`` (:func:`mesh_digest`), ``name``, ``n_original``,
     ``cloud`` (whether the shape is a point cloud: then ``faces`` is empty,
     shape ``(0, 3)``; format 2 on), ``n_caps`` (vertices added to close
@@ -52,12 +52,10 @@ from dataclasses import fields
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..runtime.checks import check_bool, check_choice, check_int, check_seed
-from ..errors import ParameterError, PreparedShapeError
-from ..core.geodesics import GEODESIC_METHODS
+from ..errors import PreparedShapeError
 from ..core.holes import fill_holes
 from ..core.mesh import Mesh, MeshLike, as_mesh
-from ..spectral.modes import MODES, N_SAMPLES, SCALABLE_ABOVE, build_spectrum, resolve_memory, select_mode
+from ..spectral.modes import build_spectrum
 from ..choice.orientation import Orientation
 from ..spectral.spectrum import Spectrum, dense_rows
 from ..runtime.timing import StageTimer
@@ -65,34 +63,11 @@ from ..runtime.timing import StageTimer
 #: Version of the file format of :meth:`PreparedShape.save` (2: point clouds, the header's ``cloud``;
 #: 3: holes closed, the header's ``n_caps`` and the setting ``fill_holes``).
 FORMAT_VERSION = 3
-#: Laplace-Beltrami basis size of the ZoomOut refinement (see :mod:`meshcorr.stages.refine`).
-REFINE_K = 40
-#: The options of :func:`meshcorr.match` that change what :func:`prepare` computes, with their defaults.
-SHAPE_SETTINGS = dict(k=6, geodesic="heat", scale_eigenvalues=True, n_samples=N_SAMPLES, refine=True,
-                      refine_k=REFINE_K, largest_component=False, random_state=0, fill_holes=True)
-
-
-def shape_settings(*, k: int, geodesic: str, scale_eigenvalues: bool, n_samples: int, refine: bool,
-                   refine_k: int, largest_component: bool, random_state: int | None,
-                   fill_holes: bool = True) -> dict:
-    """Validate the per-shape options (:data:`SHAPE_SETTINGS`) once, where they enter.
-
-    Raises
-    ------
-    ParameterError
-        An option out of range, with the message shape of :mod:`meshcorr.runtime.checks`.
-    """
-    k = check_int("k", k, minimum=2, maximum=10)
-    check_choice("geodesic", geodesic, GEODESIC_METHODS)
-    n_samples = check_int("n_samples", n_samples, minimum=k + 1)
-    for name, value in (("scale_eigenvalues", scale_eigenvalues), ("refine", refine),
-                        ("largest_component", largest_component), ("fill_holes", fill_holes)):
-        check_bool(name, value)
-    refine_k = check_int("refine_k", refine_k, minimum=2)
-    random_state = check_seed(random_state)
-    return dict(k=k, geodesic=geodesic, scale_eigenvalues=bool(scale_eigenvalues), n_samples=n_samples,
-                refine=bool(refine), refine_k=refine_k, largest_component=bool(largest_component),
-                random_state=random_state, fill_holes=bool(fill_holes))
+#: The settings of :func:`meshcorr.match` that change what :func:`meshcorr.prepare` computes, in the
+#: order prepared-shape files and cache keys record them (their defaults and checks:
+#: :class:`meshcorr.Settings`, the dict: :func:`meshcorr.pipeline.settings.shape_settings`).
+SHAPE_SETTING_NAMES = ("k", "geodesic", "scale_eigenvalues", "n_samples", "refine", "refine_k",
+                       "largest_component", "random_state", "fill_holes")
 
 
 def mesh_digest(mesh: Mesh) -> str:
@@ -108,7 +83,7 @@ def mesh_digest(mesh: Mesh) -> str:
 class PreparedShape:
     """One mesh with everything per shape that :func:`meshcorr.match` needs, for fixed settings.
 
-    Made by :func:`prepare` or :meth:`load`; pass it to :func:`meshcorr.match`
+    Made by :func:`meshcorr.prepare` or :meth:`load`; pass it to :func:`meshcorr.match`
     in place of a mesh. Treat it as immutable: its arrays are read-only.
 
     Attributes
@@ -118,7 +93,7 @@ class PreparedShape:
     spectrum : Spectrum
         Steps 1-3: embedding ``(n, k - 1)``, eigenvalues ``(k,)``, geodesic rows.
     settings : dict
-        :data:`SHAPE_SETTINGS` it was made for, and the resolved ``mode``.
+        :data:`SHAPE_SETTING_NAMES` it was made for, and the resolved ``mode``.
     """
 
     def __init__(self, mesh: Mesh, spectrum: Spectrum, settings: dict) -> None:
@@ -177,7 +152,7 @@ class PreparedShape:
         # Values of a type _encode has no rule for are left out: they are recomputed when needed.
         entries = [[list(key), spec] for key, value in list(self.mesh.store.items())
                    if (spec := _encode(value, arrays)) is not _SKIP and not _contains(spec, _SKIP)]
-        header = dict(format=FORMAT_VERSION, meshcorr=_version(), settings=self.settings,
+        header = dict(format=FORMAT_VERSION, meshcorr=meshcorr_version(), settings=self.settings,
                       mesh_sha256=self.digest, name=self.mesh.name, n_original=self.mesh.n_original,
                       n_caps=self.mesh.n_caps, cloud=self.mesh.is_cloud,
                       max_geodesic=self.spectrum.max_geodesic, entries=entries)
@@ -207,7 +182,7 @@ class PreparedShape:
             :func:`mesh_digest` after validation).
         settings : dict, optional
             Refuse the file unless it was made with these settings
-            (:data:`SHAPE_SETTINGS` keys, and ``mode`` if given).
+            (:data:`SHAPE_SETTING_NAMES` keys, and ``mode`` if given).
 
         Raises
         ------
@@ -262,51 +237,6 @@ class PreparedShape:
                 f"k={s['k']}, geodesic={s['geodesic']!r}, random_state={s['random_state']!r})")
 
 
-def prepare(mesh: MeshLike, *, k: int = 6, geodesic: str = "heat", scale_eigenvalues: bool = True,
-            mode: str = "auto", n_samples: int = N_SAMPLES, refine: bool = True, refine_k: int = REFINE_K,
-            largest_component: bool = False, random_state: int | None = 0, max_memory: int | str | None = None,
-            scalable_above: int = SCALABLE_ABOVE, name: str | None = None, cache=None,
-            fill_holes: bool = True) -> PreparedShape:
-    """Everything per shape that :func:`meshcorr.match` needs, computed once.
-
-    Parameters
-    ----------
-    mesh : path, trimesh.Trimesh, Mesh or (vertices, faces)
-    k, geodesic, scale_eigenvalues, n_samples, refine, refine_k, largest_component, random_state, fill_holes
-        As in :func:`meshcorr.match`; :func:`meshcorr.match` refuses a shape
-        prepared with other values (a shape for the partial mode or a
-        one-to-one map needs ``fill_holes=False``).
-    mode : {"auto", "dense", "scalable"}
-        As in :func:`meshcorr.match`, resolved for this mesh alone ("auto":
-        dense up to ``scalable_above`` vertices). A pair runs in the mode
-        its larger mesh needs: prepare both shapes of a mixed pair with
-        that mode.
-    max_memory, scalable_above
-        As in :func:`meshcorr.match`.
-    name : str, optional
-        Name used in messages (default: the file name, or "mesh").
-    cache : ShapeCache, path or None
-        Look the shape up in this on-disk cache (:mod:`meshcorr.shapes.cache`) and
-        store it there when it was not found.
-
-    Returns
-    -------
-    shape : PreparedShape
-    """
-    settings = shape_settings(k=k, geodesic=geodesic, scale_eigenvalues=scale_eigenvalues, n_samples=n_samples,
-                              refine=refine, refine_k=refine_k, largest_component=largest_component,
-                              random_state=random_state, fill_holes=fill_holes)
-    check_choice("mode", mode, MODES)
-    loaded = load_mesh(mesh, settings, name=name)
-    mode = select_mode(mode, loaded.n_vertices, loaded.n_vertices, max_memory=resolve_memory(max_memory),
-                       scalable_above=scalable_above)
-    if cache is not None:
-        from .cache import as_cache
-
-        return as_cache(cache).prepare(loaded, settings, mode)
-    return prepare_mesh(loaded, settings, mode)
-
-
 def load_mesh(shape: MeshLike, settings: dict, *, name: str | None) -> Mesh:
     """The validated :class:`Mesh` of user input, with enough vertices for ``settings["k"]``.
 
@@ -324,7 +254,7 @@ def _closed(mesh: Mesh, settings: dict) -> Mesh:
 
 
 def prepare_mesh(mesh: Mesh, settings: dict, mode: str, timer: StageTimer | None = None) -> PreparedShape:
-    """:func:`prepare` of a validated mesh in a resolved ``mode`` ("dense" or "scalable")."""
+    """:func:`meshcorr.prepare` of a validated mesh in a resolved ``mode`` ("dense" or "scalable")."""
     shape = PreparedShape(mesh, shape_spectrum(mesh, settings, mode, timer or StageTimer()), settings)
     warm(mesh, shape.spectrum, settings)
     return shape
@@ -353,7 +283,7 @@ def warm(mesh: Mesh, spectrum: Spectrum, settings: dict) -> None:
     from ..choice.curvature import curvature_disagreement
     from ..choice.extremities import spectrum_extremities
     from ..choice.orientation import orientation_scores
-    from ..pipeline.run import embedding_spread
+    from ..stages.anchors import embedding_spread
     from ..stages.refine import laplace_basis
     from ..choice.selection import distortion_sources
 
@@ -403,7 +333,8 @@ def as_meshes(*shapes: Mesh | PreparedShape) -> list[Mesh]:
     return [shape.mesh if isinstance(shape, PreparedShape) else shape for shape in shapes]
 
 
-def _version() -> str:
+def meshcorr_version() -> str:
+    """The version of meshcorr, written into (and required of) prepared-shape files and cache keys."""
     from .. import __version__
 
     return __version__
@@ -430,10 +361,10 @@ def _read(path, *, name: str | None = None) -> tuple[dict, dict]:
         reason = "it is not an .npz archive" if "pickle" in str(exc) else exc
         raise PreparedShapeError(f"{name} is not a prepared shape written by meshcorr ({reason}); prepare the "
                                  "mesh again (meshcorr.prepare) or clear the cache (meshcorr cache clear).") from None
-    if version != FORMAT_VERSION or header.get("meshcorr") != _version():
+    if version != FORMAT_VERSION or header.get("meshcorr") != meshcorr_version():
         raise PreparedShapeError(
             f"{name} was written by meshcorr {header.get('meshcorr')} (format {version}); this is meshcorr "
-            f"{_version()} (format {FORMAT_VERSION}), whose results may differ. Prepare the mesh again or "
+            f"{meshcorr_version()} (format {FORMAT_VERSION}), whose results may differ. Prepare the mesh again or "
             "clear the cache (meshcorr cache clear).")
     return header, arrays
 

@@ -49,6 +49,7 @@ from scipy.spatial.distance import cdist
 
 from ..runtime.threads import kdtree_query
 from ..errors import ParameterError
+from .tps import mean_pairwise_distance
 
 RowsFn = Callable[[int], np.ndarray]
 
@@ -56,6 +57,8 @@ _BLOCK_ELEMENTS = 4_000_000  # ~32 MB of float64 per block
 
 #: Largest ``n1 * n2`` matched by the exact dense (row block) computation.
 EXACT_PAIRS = 4_000_000
+#: Length scales of the anchor term: the embedding's (:func:`embedding_spread`) or the paper's geodesic one.
+ANCHOR_SCALES = ("embedding", "geodesic")
 
 #: Target candidates per source vertex in anchor selection beyond ``EXACT_PAIRS``.
 N_CANDIDATES = 16
@@ -266,3 +269,17 @@ def _pair_cost(X, Y, F1, F2, i: np.ndarray, j: np.ndarray) -> np.ndarray:
     if F1.size:
         c += np.abs(F1[i] - F2[j]).sum(axis=1)
     return c
+
+
+def embedding_spread(spectrum) -> float:
+    """The anchors' length scale: :func:`meshcorr.stages.tps.mean_pairwise_distance` of a spectrum's embedding.
+
+    The anchor term of the proximity-aided matching is put in the embedding's
+    length scale with it (docs/method.md, step 6). It depends on the source
+    shape only (a seeded sample of its embedding), so it is computed once per
+    spectrum and kept in ``spectrum.memo["spread"]``: a prepared shape
+    matched many times measures it once (the same value).
+    """
+    if "spread" not in spectrum.memo:
+        spectrum.memo["spread"] = mean_pairwise_distance(spectrum.embedding)
+    return spectrum.memo["spread"]

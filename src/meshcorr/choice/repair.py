@@ -34,7 +34,10 @@ import numpy as np
 from ..runtime.threads import parallel_map
 from ..core.mesh import Mesh
 from .orientation import consistent_vertices
-from ..stages.refine import _basis_size, check_vertex_map, nearest_vertices, orthogonal_fit, pair_bases, zoomout
+from ..runtime.checks import check_vertex_map
+from ..spectral.basis import basis_size, orthogonal_fit, pair_bases
+from ..spectral.nearest import nearest_vertices
+from ..stages.refine import REFINED_MAP, zoomout
 from .selection import MapCandidate
 
 #: Laplace-Beltrami functions of the functional map fitted on the consistent part.
@@ -67,8 +70,8 @@ def repair_map(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40, 
         The new map; None when fewer than ``3 * k_start`` sampled vertices
         are consistent (nothing to start from).
     """
-    mapping = check_vertex_map(mapping, source, target)
-    k = _basis_size(k, source, target)
+    mapping = check_vertex_map(mapping, source.n_vertices, target.n_vertices, messages=REFINED_MAP)
+    k = basis_size(k, source, target)
     k_start = min(k_start, k)
     good = consistent_vertices(source, target, mapping, random_state=random_state)
     if len(good) < 3 * k_start:

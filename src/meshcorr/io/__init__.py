@@ -34,6 +34,7 @@ with deferred_interrupt():  # trimesh's guards around its optional imports catch
     import trimesh
 from meshcorr.errors import InputError, MeshError, MeshWarning, OutputError, ParameterError
 from meshcorr.io.off import parse_off
+from meshcorr.runtime.checks import MapMessages, check_vertex_map
 
 __all__ = ["SUPPORTED_FORMATS", "atomic_write", "check_outputs", "read_map", "read_mesh", "staged_writes",
            "write_map", "write_mesh"]
@@ -527,14 +528,11 @@ def atomic_write(path, writer: Callable[[BinaryIO], object]) -> None:
         _replace(temp, path)
 
 
-def _check_map(mapping) -> np.ndarray:
-    mapping = np.asarray(mapping)
-    if mapping.ndim != 1 or not np.issubdtype(mapping.dtype, np.integer):
-        raise ParameterError(
-            "The 'mapping' parameter of write_map must be a 1-D integer array. "
-            f"Got shape {mapping.shape} and dtype {mapping.dtype} instead."
-        )
-    return mapping.astype(np.int64, copy=False)
+#: The words of a map that :func:`write_map` refuses (:func:`meshcorr.runtime.checks.check_vertex_map`).
+_WRITTEN_MAP = MapMessages(
+    not_integer="The 'mapping' parameter of write_map must be a 1-D integer array. "
+                "Got shape {shape} and dtype {dtype} instead.",
+    wrong_length="", out_of_range="")  # write_map checks no vertex counts
 
 
 def write_map(path, mapping) -> None:
@@ -548,7 +546,7 @@ def write_map(path, mapping) -> None:
     mapping : (n,) int
         The map, e.g. ``p2p_21[i]`` = vertex of mesh 1 matched to vertex ``i`` of mesh 2.
     """
-    mapping = _check_map(mapping)
+    mapping = check_vertex_map(mapping, messages=_WRITTEN_MAP)
     if Path(path).suffix.lower() == ".npy":
         atomic_write(path, lambda file: np.save(file, mapping, allow_pickle=False))
     else:

@@ -81,7 +81,10 @@ from ..errors import ParameterError
 from ..core.laplacian import vertex_areas
 from ..core.mesh import Mesh
 from ..choice.orientation import mesh_orientation, orientation_score, vertex_normals
-from .refine import _basis_size, check_vertex_map, laplace_basis, nearest_vertices, orthogonal_fit, pair_bases
+from ..runtime.checks import check_vertex_map
+from ..spectral.basis import basis_size, laplace_basis, orthogonal_fit, pair_bases
+from ..spectral.nearest import nearest_vertices
+from .refine import REFINED_MAP
 
 #: Weight of the shells' unit normals against coordinates of a unit-area shape.
 NORMAL_WEIGHT = 0.3
@@ -165,11 +168,12 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
         raise ParameterError("Shell refinement needs triangle meshes (the shells' normals need faces); "
                              "point clouds keep the ZoomOut map.")
     n1 = source.n_vertices
-    mapping = check_vertex_map(mapping, source, target).astype(np.int64)  # a copy, refined in place
+    mapping = check_vertex_map(mapping, source.n_vertices, target.n_vertices, messages=REFINED_MAP)
+    mapping = mapping.astype(np.int64)  # a copy, refined in place
     n_sample = check_int("n_sample", n_sample, minimum=1)
     if descriptors is not None:
         descriptors = _checked_descriptors(descriptors, n1, target.n_vertices)
-    k = _basis_size(k, source, target)
+    k = basis_size(k, source, target)
     part = part_fraction is not None
     if part:
         part_fraction = check_float("part_fraction", part_fraction, minimum=1e-3, maximum=1.0)

@@ -16,7 +16,7 @@ import meshcorr
 from meshcorr import datasets as ds
 from meshcorr.errors import ParameterError
 from meshcorr.core.mesh import Mesh
-from meshcorr.choice.orientation import orientation_score
+from meshcorr.core.orientation import orientation_score
 from meshcorr.stages.refine import laplace_basis, prefetch_bases, refine_map, zoomout
 
 

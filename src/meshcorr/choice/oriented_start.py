@@ -51,7 +51,7 @@ import numpy as np
 from ..stages.landmarks import RowFn, landmark_descriptors
 from ..core.laplacian import vertex_areas
 from ..core.mesh import Mesh
-from .orientation import mesh_orientation
+from ..core.orientation import mesh_orientation
 from ..spectral.basis import laplace_basis
 from ..spectral.nearest import nearest_rows
 

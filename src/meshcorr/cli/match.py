@@ -17,7 +17,7 @@ from ..spectral.modes import MODES, N_SAMPLES, SCALABLE_ABOVE
 from ..pipeline.run import REFINE_K
 from ..stages.reorder import REORDER_MODES
 from ._mapfile import print_map
-from ._progress import StageProgress
+from ..runtime.progress import StderrProgress as StageProgress
 
 HELP = "compute the vertex map from SOURCE to TARGET"
 

@@ -41,6 +41,7 @@ from ..runtime.checks import check_int
 from ..errors import InputError, ParameterError
 from ..core.mesh import Mesh
 from ..runtime.checks import check_vertex_map
+from ..io.arrays import read_npz, write_npz
 from .basis import laplace_basis
 from .nearest import nearest_rows
 
@@ -128,8 +129,6 @@ class FunctionalMap:
 
     def save(self, path: str | os.PathLike) -> None:
         """Write every array to one ``.npz`` file, atomically (names as the attributes)."""
-        from ..io import write_npz
-
         write_npz(path, {name: getattr(self, name) for name in self.__dataclass_fields__})
 
     @classmethod
@@ -141,8 +140,6 @@ class FunctionalMap:
         InputError
             If the file is missing, unreadable, lacks an array or its shapes disagree.
         """
-        from ..io import read_npz
-
         arrays = read_npz(path, "a functional map file")  # ParameterError if missing or unreadable
         missing = [name for name in cls.__dataclass_fields__ if name not in arrays]
         if missing:

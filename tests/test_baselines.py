@@ -9,7 +9,7 @@ import trimesh
 import meshcorr
 from meshcorr import datasets as ds
 from meshcorr.baselines import METHODS, SPATIAL_METHODS, method_options, run_method
-from meshcorr.baselines.align import Similarity, align_pair, pca_alignment, prealign, vertex_areas
+from meshcorr.baselines.align import Similarity, align_pair, barycentric_areas, pca_alignment, prealign
 from meshcorr.baselines.rigid_icp import initial_rotations, rigid_icp, umeyama
 from meshcorr.baselines.sampling import farthest_point_sample
 from meshcorr.baselines.shape_context import chi_square_cost, match_histograms
@@ -151,7 +151,7 @@ def test_bijective_needs_equal_counts(shape):
 
 
 def test_prealign_normalises_pose_and_scale(shape):
-    w = vertex_areas(shape.vertices, shape.faces)
+    w = barycentric_areas(shape.vertices, shape.faces)
     np.testing.assert_allclose(w.sum(), trimesh.Trimesh(shape.vertices, shape.faces, process=False).area,
                                rtol=1e-12)
     P = prealign(shape.vertices, w)
@@ -166,8 +166,8 @@ def test_prealign_normalises_pose_and_scale(shape):
 
 def test_prealign_is_invariant_to_similarity_and_order(shape, moved):
     copy, truth = moved
-    P = prealign(shape.vertices, vertex_areas(shape.vertices, shape.faces))
-    Q = prealign(copy.vertices, vertex_areas(copy.vertices, copy.faces))
+    P = prealign(shape.vertices, barycentric_areas(shape.vertices, shape.faces))
+    Q = prealign(copy.vertices, barycentric_areas(copy.vertices, copy.faces))
     np.testing.assert_allclose(Q[truth], P, atol=1e-9)
 
 

@@ -10,6 +10,8 @@ import trimesh
 from scipy.spatial import cKDTree
 
 from meshcorr import datasets
+from meshcorr.evaluation.datasets import capsule
+from meshcorr.evaluation.datasets import creatures as creature_module
 from meshcorr.datasets import (
     SyntheticShape,
     creature,
@@ -48,7 +50,7 @@ def _edge_lengths(shape: SyntheticShape, edges: np.ndarray) -> np.ndarray:
 
 def _chart_points(shape: SyntheticShape) -> np.ndarray:
     t = shape.params[:, 0]
-    return datasets._chart_embedding(shape.params, t.min(), t.max())
+    return capsule.chart_embedding(shape.params, t.min(), t.max())
 
 
 @pytest.mark.parametrize(("make", "kwargs"), CASES, ids=CASE_IDS)
@@ -245,7 +247,7 @@ def _best_symmetry_mismatch(shape: SyntheticShape, length: float) -> float:
                     t_min + t_max - t if reverse else t,
                     c - theta if mirror else theta + c,
                 ])
-                _, j = tree.query(datasets._chart_embedding(mapped, t_min, t_max))
+                _, j = tree.query(capsule.chart_embedding(mapped, t_min, t_max))
                 worst.append(np.abs(rho - rho[j]).max())
     return min(worst)
 
@@ -370,7 +372,7 @@ POSES = ["bent", "curled", -1.0, 0.5]
 
 
 def _limb_labels(shape: SyntheticShape) -> np.ndarray:
-    return datasets._creature_labels(datasets._creature_directions(shape.params))
+    return creature_module._creature_labels(creature_module.creature_directions(shape.params))
 
 
 @pytest.mark.parametrize("kwargs", CREATURES.values(), ids=CREATURES.keys())
@@ -446,7 +448,7 @@ def test_creature_poses_are_near_isometric():
 
 def test_creature_deterministic_and_seeded():
     a = creature(random_state=1)
-    params, faces, _ = datasets._creature_mesh.__wrapped__(1, 1)  # rebuilt, not cached
+    params, faces, _ = creature_module._creature_mesh.__wrapped__(1, 1)  # rebuilt, not cached
     np.testing.assert_array_equal(params, a.params)
     np.testing.assert_array_equal(faces, a.faces)
     other, regular = creature(random_state=0), creature(random_state=None)
@@ -485,8 +487,8 @@ def test_creature_ground_truth_across_resolutions(source, target):
     # the truth does not depend on the poses, and is found on the same limb
     bent = creature(**{**target, "pose": "curled"})
     np.testing.assert_array_equal(ground_truth(creature(**source, pose="bent"), bent), truth)
-    beyond_fillets = np.linalg.norm(datasets._creature_rest(
-        datasets._creature_directions(a.params)), axis=1) > 1.2
+    beyond_fillets = np.linalg.norm(creature_module.creature_rest(
+        creature_module.creature_directions(a.params)), axis=1) > 1.2
     np.testing.assert_array_equal(_limb_labels(b)[truth][beyond_fillets],
                                   _limb_labels(a)[beyond_fillets])
 
@@ -494,7 +496,7 @@ def test_creature_ground_truth_across_resolutions(source, target):
 def test_creature_ground_truth_tip_to_tip():
     # the chart shrinks exponentially along a limb; the truth must still be local there
     a, b = creature(resolution=1), creature(resolution=2, random_state=1)
-    tips = [np.argmax(shape.vertices @ datasets._CREATURE[0].frame[0]) for shape in (a, b)]
+    tips = [np.argmax(shape.vertices @ creature_module._CREATURE[0].frame[0]) for shape in (a, b)]
     truth = ground_truth(a, b)
     tip_edge = np.linalg.norm(b.vertices[truth[tips[0]]] - b.vertices[tips[1]])
     assert tip_edge < 0.2

@@ -7,7 +7,7 @@ import pytest
 
 from meshcorr import datasets as ds
 from meshcorr.core.mesh import Mesh
-from meshcorr.choice.orientation import orientation_score
+from meshcorr.core.orientation import orientation_score
 
 
 @pytest.fixture(scope="module")
@@ -40,7 +40,7 @@ def test_unseeded_orientation_sample_is_not_cached(creature_pair):
 
 def test_signed_volumes_equal_the_direct_sum_from_each_origin(creature_pair):
     """One pass over the faces gives the divergence-theorem volume seen from any origin."""
-    from meshcorr.choice.orientation import _signed_volumes
+    from meshcorr.core.orientation import _signed_volumes
 
     (V, F), _ = creature_pair
     open_faces = F[: len(F) // 2]  # a large hole: the volume depends on the origin
@@ -78,7 +78,7 @@ def test_shared_neighbours_give_the_same_anchors_and_map():
 
 
 def test_orientation_scores_equal_the_two_scores_and_cache_the_regions(creature_pair):
-    from meshcorr.choice.orientation import orientation_scores, regional_orientation
+    from meshcorr.core.orientation import orientation_scores, regional_orientation
 
     (V1, F1), (V2, F2) = creature_pair
     source, target = Mesh(V1, F1), Mesh(V2, F2)

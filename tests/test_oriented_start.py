@@ -5,7 +5,7 @@ import pytest
 
 from meshcorr.stages.landmarks import landmark_map
 from meshcorr.core.mesh import Mesh
-from meshcorr.choice.orientation import orientation_score
+from meshcorr.core.orientation import orientation_score
 from meshcorr.choice.oriented_start import descriptors, fit_oriented_map, orientation_operators
 from meshcorr.stages.refine import laplace_basis
 from .test_selection import _geodesics, _person, _tip_vertex

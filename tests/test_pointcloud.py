@@ -16,7 +16,7 @@ from meshcorr.evaluation.metrics import geodesic_errors, map_quality
 from meshcorr.core.geodesics import geodesic_solver
 from meshcorr.core.laplacian import vertex_areas
 from meshcorr.core.mesh import Mesh, as_mesh
-from meshcorr.choice.orientation import mesh_orientation, oriented_normals
+from meshcorr.core.orientation import mesh_orientation, oriented_normals
 from meshcorr.core.pointcloud import MIN_POINTS, edges, validate_cloud
 from meshcorr.shapes.prepared import FORMAT_VERSION, PreparedShape
 

@@ -16,7 +16,7 @@ import meshcorr
 from meshcorr import datasets as ds
 from meshcorr.errors import ParameterError
 from meshcorr.core.mesh import Mesh
-from meshcorr.choice.orientation import orientation_score
+from meshcorr.core.orientation import orientation_score
 from meshcorr.stages.refine import laplace_basis, prefetch_bases, refine_map, zoomout
 
 
@@ -123,7 +123,7 @@ def test_laplace_basis_matches_a_dense_generalised_eigh_up_to_sign(poses):
 
 
 def test_pruned_search_equals_brute_force(poses):
-    from meshcorr.stages.refine import _nearest_rows, _nearest_rows_pruned
+    from meshcorr.spectral.nearest import _nearest_rows_pruned, nearest_rows as _nearest_rows
 
     rest, bent = poses
     _, phi1 = laplace_basis(rest, 20)
@@ -138,12 +138,12 @@ def test_pruned_search_equals_brute_force(poses):
 
 
 def test_zoomout_prunes_above_the_threshold_with_the_same_map(poses, monkeypatch):
-    import meshcorr.stages.refine as refine_module
+    import meshcorr.spectral.nearest as nearest_module
 
     rest, bent = poses
     start = noisy_identity(bent, 0.03)
     brute, _ = refine_map(rest, bent, start, k=20)
-    monkeypatch.setattr(refine_module, "PRUNE_ABOVE", 10)
+    monkeypatch.setattr(nearest_module, "PRUNE_ABOVE", 10)
     pruned, _ = refine_map(rest, bent, start, k=20)
     np.testing.assert_array_equal(pruned, brute)
 
@@ -163,10 +163,11 @@ _OVERLAPPING_REFINE = """
 import json, threading, time
 from threadpoolctl import threadpool_info
 import meshcorr.stages.refine as refine
+import meshcorr.spectral.basis as basis
 from meshcorr import datasets as ds
 from meshcorr.core.mesh import Mesh
 
-real_eigsh, lock, barrier, entered = refine.eigsh, threading.Lock(), threading.Barrier(2), []
+real_eigsh, lock, barrier, entered = basis.eigsh, threading.Lock(), threading.Barrier(2), []
 
 def overlapping_eigsh(*args, **kwargs):
     with lock:
@@ -179,7 +180,7 @@ def overlapping_eigsh(*args, **kwargs):
 def counts():
     return sorted(i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas")
 
-refine.eigsh = overlapping_eigsh
+basis.eigsh = overlapping_eigsh
 shape = ds.figure(resolution=1)
 source, target = Mesh(shape.vertices, shape.faces), Mesh(shape.vertices, shape.faces)
 before = counts()
@@ -214,7 +215,7 @@ def test_prefetched_bases_are_the_ones_computed_directly(poses):
 
 
 def test_prefetch_reraises_the_worker_error_and_cancels_the_worker_after_an_error(poses, monkeypatch):
-    import meshcorr.stages.refine as refine
+    import meshcorr.spectral.basis as refine
 
     def failing(mesh, k, random_state, cancel):
         raise ParameterError("basis failed")
@@ -286,7 +287,7 @@ def test_match_restores_the_blas_thread_count():
 _INTERRUPTED_WAIT = """
 import signal, time
 from scipy.sparse.linalg import LinearOperator
-import meshcorr.stages.refine as refine
+import meshcorr.spectral.basis as refine
 from meshcorr import datasets as ds
 from meshcorr.core.mesh import Mesh
 
@@ -324,8 +325,8 @@ def test_ctrl_c_while_waiting_for_the_bases_cancels_the_worker_and_exits_cleanly
 
 
 def test_single_precision_screen_gives_the_double_precision_answer(poses, monkeypatch):
-    import meshcorr.stages.refine as refine_module
-    from meshcorr.stages.refine import _nearest_rows, _nearest_rows_double, _single_precision_bound
+    import meshcorr.spectral.nearest as refine_module
+    from meshcorr.spectral.nearest import _nearest_rows_double, _single_precision_bound, nearest_rows as _nearest_rows
 
     screened = []
     original = refine_module._single_precision_bound

@@ -223,7 +223,7 @@ def test_an_inside_out_file_is_aligned_by_its_outward_normals(poses):
 
 
 def test_a_given_orientation_score_decides_the_side(poses):
-    from meshcorr.choice.orientation import orientation_score
+    from meshcorr.core.orientation import orientation_score
 
     rest, bent = poses
     zoomed, _ = refine_map(rest, bent, np.arange(rest.n_vertices), k=30)
@@ -258,7 +258,7 @@ def test_a_sheet_without_a_reliable_outside_is_still_aligned():
     import warnings
 
     import meshcorr
-    from meshcorr.choice.orientation import mesh_orientation
+    from meshcorr.core.orientation import mesh_orientation
 
     n = 24
     x, y = np.meshgrid(np.linspace(-1.0, 1.3, n), np.linspace(-1.0, 1.0, n))

@@ -32,7 +32,7 @@ MOVED: dict[str, str] = {
     "refine": "stages.refine", "shells": "stages.shells", "bijection": "stages.bijection",
     "landmark_map": "stages.landmarks",
     "symmetry": "choice.symmetry", "selection": "choice.selection", "extremities": "choice.extremities",
-    "orientation": "choice.orientation", "curvature": "choice.curvature", "repair": "choice.repair",
+    "orientation": "core.orientation", "curvature": "choice.curvature", "repair": "choice.repair",
     "oriented_start": "choice.oriented_start",
     "prepared": "shapes.prepared", "cache": "shapes.cache",
     "partial": "pipeline.partial", "settings": "pipeline.settings", "matcher": "pipeline.matcher",

@@ -72,7 +72,7 @@ class Similarity:
                           other.scale * other.rotation @ self.translation + other.translation)
 
 
-def vertex_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+def barycentric_areas(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Barycentric vertex areas: a third of the area of each incident triangle.
 
     Parameters
@@ -98,7 +98,7 @@ def pca_alignment(points: np.ndarray, weights: np.ndarray | None = None) -> Simi
     ----------
     points : (n, 3) float
     weights : (n,) float, optional
-        Non-negative point weights (e.g. :func:`vertex_areas`, which makes
+        Non-negative point weights (e.g. :func:`barycentric_areas`, which makes
         the result insensitive to the tessellation); uniform if omitted.
 
     Returns

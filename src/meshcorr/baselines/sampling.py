@@ -5,11 +5,16 @@ maximum intercluster distance", Theor. Comput. Sci. 1985; Eldar et al.,
 "The farthest point strategy for progressive image sampling", IEEE TIP
 1997): start from a seeded random point, then repeatedly add the point
 farthest (Euclidean) from those chosen. ``O(n m)`` time, ``O(n)`` memory.
+The greedy loop is that of the landmark vertices,
+:func:`meshcorr.core.sampling.farthest_point_indices`, here on squared
+Euclidean distances (the same order as the distances).
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from ..core.sampling import farthest_point_indices
 
 
 def farthest_point_sample(points: np.ndarray, n_samples: int, *, random_state: int | None = 0) -> np.ndarray:
@@ -26,16 +31,10 @@ def farthest_point_sample(points: np.ndarray, n_samples: int, *, random_state: i
     Returns
     -------
     indices : (min(n, n_samples),) int
-        Distinct row indices, in the order chosen.
+        Distinct row indices, in the order chosen (the first drawn with ``random_state``).
     """
     n = len(points)
     if n_samples >= n:
         return np.arange(n)
-    rng = np.random.default_rng(random_state)
-    chosen = np.empty(n_samples, dtype=np.int64)
-    chosen[0] = rng.integers(n)
-    nearest = np.sum((points - points[chosen[0]]) ** 2, axis=1)
-    for m in range(1, n_samples):
-        chosen[m] = int(np.argmax(nearest))
-        np.minimum(nearest, np.sum((points - points[chosen[m]]) ** 2, axis=1), out=nearest)
-    return chosen
+    return farthest_point_indices(lambda i: np.sum((points - points[i]) ** 2, axis=1), n, n_samples,
+                                  random_state=random_state)[0]

@@ -47,7 +47,7 @@ from ..core.boundary import mesh_boundary
 from ..errors import ParameterError
 from ..core.mesh import Mesh
 from ..core.laplacian import laplacian
-from .orientation import oriented_normals
+from ..core.orientation import oriented_normals
 
 #: Ball radii, as fractions of sqrt(area), over which the curvature is averaged.
 CURVATURE_RADII = (0.045,)
@@ -60,9 +60,9 @@ def signed_mean_curvature(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
     ----------
     mesh : Mesh
         Its winding is repaired and turned outwards internally
-        (:func:`meshcorr.choice.orientation.mesh_orientation`). A point cloud uses
+        (:func:`meshcorr.core.orientation.mesh_orientation`). A point cloud uses
         its estimated outward normals and its cloud Laplacian
-        (:func:`meshcorr.choice.orientation.oriented_normals`,
+        (:func:`meshcorr.core.orientation.oriented_normals`,
         :func:`meshcorr.core.laplacian.laplacian`): the same formula, with
         :math:`L` and :math:`M` of the cloud.
 

@@ -51,8 +51,9 @@ import numpy as np
 from ..stages.landmarks import RowFn, landmark_descriptors
 from ..core.laplacian import vertex_areas
 from ..core.mesh import Mesh
-from .orientation import mesh_orientation
-from ..stages.refine import _nearest_rows, laplace_basis
+from ..core.orientation import mesh_orientation
+from ..spectral.basis import laplace_basis
+from ..spectral.nearest import nearest_rows
 
 #: Basis size of the fit.
 K_FIT = 20
@@ -188,7 +189,7 @@ def fit_oriented_map(source: Mesh, target: Mesh, source_geodesics: RowFn, target
         orientation += _commutator_normal(o_s / norm, o_t / norm)
     H += W_ORIENTATION * orientation * np.trace(H) / max(np.trace(orientation), 1e-12)
     C = np.linalg.solve(H + 1e-9 * np.trace(H) / (k * k) * np.eye(k * k), rhs).reshape((k, k), order="F")
-    mapping = _nearest_rows(phi_s @ C, phi_t)
+    mapping = nearest_rows(phi_s @ C, phi_t)
     mapping[pairs[:, 0]] = pairs[:, 1]
     return mapping
 

@@ -4,13 +4,13 @@ A map can be right on most of a shape and mirrored on a part of it: the
 legs of a person or the hind legs of a dog swapped left for right under a
 right upper body. Its whole-surface orientation score stays high (the part
 is small), but the worst of its regions reverses the orientation
-(:func:`meshcorr.choice.orientation.regional_orientation`). ZoomOut does not undo
+(:func:`meshcorr.core.orientation.regional_orientation`). ZoomOut does not undo
 such a swap: at every scale the swapped part pulls the functional map its
 own way.
 
 This module starts again from the consistent part only. The sampled source
 vertices whose mapped neighbourhood keeps the orientation, in regions that
-keep it on the whole (:func:`meshcorr.choice.orientation.consistent_vertices`),
+keep it on the whole (:func:`meshcorr.core.orientation.consistent_vertices`),
 give the orthogonal functional map :math:`C` of the first
 :data:`REPAIR_K` Laplace-Beltrami functions,
 :math:`\\Phi_1[S] C \\approx \\Phi_2[T(S)]` (the swapped part left out); a
@@ -33,8 +33,11 @@ import numpy as np
 
 from ..runtime.threads import parallel_map
 from ..core.mesh import Mesh
-from .orientation import consistent_vertices
-from ..stages.refine import _basis_size, check_vertex_map, nearest_vertices, orthogonal_fit, pair_bases, zoomout
+from ..core.orientation import consistent_vertices
+from ..runtime.checks import check_vertex_map
+from ..spectral.basis import basis_size, orthogonal_fit, pair_bases
+from ..spectral.nearest import nearest_vertices
+from ..stages.refine import REFINED_MAP, zoomout
 from .selection import MapCandidate
 
 #: Laplace-Beltrami functions of the functional map fitted on the consistent part.
@@ -50,7 +53,7 @@ def repair_map(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40, 
     Parameters
     ----------
     source, target : Mesh
-        With a reliable outside (:func:`meshcorr.choice.orientation.mesh_orientation`).
+        With a reliable outside (:func:`meshcorr.core.orientation.mesh_orientation`).
     mapping : (n1,) int
         ``mapping[i]``: target vertex of source vertex i.
     k : int
@@ -67,8 +70,8 @@ def repair_map(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40, 
         The new map; None when fewer than ``3 * k_start`` sampled vertices
         are consistent (nothing to start from).
     """
-    mapping = check_vertex_map(mapping, source, target)
-    k = _basis_size(k, source, target)
+    mapping = check_vertex_map(mapping, source.n_vertices, target.n_vertices, messages=REFINED_MAP)
+    k = basis_size(k, source, target)
     k_start = min(k_start, k)
     good = consistent_vertices(source, target, mapping, random_state=random_state)
     if len(good) < 3 * k_start:

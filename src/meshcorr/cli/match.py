@@ -18,7 +18,7 @@ from ..spectral.modes import MODES
 from ..pipeline.settings import Settings
 from ..stages.reorder import REORDER_MODES
 from ._mapfile import print_map
-from ._progress import StageProgress
+from ..runtime.progress import StderrProgress as StageProgress
 
 HELP = "compute the vertex map from SOURCE to TARGET"
 

@@ -18,7 +18,7 @@ from ..errors import MeshError
 from .geodesics import ProgressFn, pairwise_geodesics
 from .pointcloud import validate_cloud
 from .store import ShapeStore
-from .validate import _check_vertex_count, _select_component, validate_mesh
+from .validate import check_vertex_count, select_component, validate_mesh
 
 
 class Mesh:
@@ -149,11 +149,11 @@ def as_mesh(obj: MeshLike, *, name: str | None = None, largest_component: bool =
             return obj
         # A Mesh made directly, not by as_mesh: its components are checked as any input's (this raises
         # without largest_component).
-        vertices, faces, kept = _select_component(obj.vertices, obj.faces, largest_component, obj.name)
+        vertices, faces, kept = select_component(obj.vertices, obj.faces, largest_component, obj.name)
         if len(kept) == obj.n_vertices:
             obj.store.put(("connected",), True)
             return obj
-        _check_vertex_count(len(kept), min_vertices, obj.name, reason)
+        check_vertex_count(len(kept), min_vertices, obj.name, reason)
         return Mesh(vertices, faces, name=obj.name, kept=obj.kept[kept], n_original=obj.n_original)
     if isinstance(obj, (str, os.PathLike)):
         from ..io import read_mesh

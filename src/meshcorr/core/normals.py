@@ -1,7 +1,7 @@
 """Outward normals of a point cloud, estimated and checked.
 
 A mesh's triangles give its normals and, once their winding is made
-consistent, its outside (:mod:`meshcorr.choice.orientation`). A cloud has neither;
+consistent, its outside (:mod:`meshcorr.core.orientation`). A cloud has neither;
 the pipeline needs both (the orientation score that tells a map from its
 mirror image, the sign of the curvature), so they are estimated here, then
 checked:
@@ -43,7 +43,7 @@ checked:
    (the votes make that rare).
 
 The estimate is called **unreliable** (the same flag and warning as a mesh's
-orientation, :attr:`meshcorr.choice.orientation.Orientation.reliable`) when
+orientation, :attr:`meshcorr.core.orientation.Orientation.reliable`) when
 
 - more than :data:`MAX_DISAGREEMENT` of the neighbour pairs that lie side
   by side on the surface (their offset at most 60 degrees off the tangent

@@ -6,7 +6,7 @@ uses the neighbourhoods of its points, each computation dispatching on
 ``is_cloud`` in one place: geodesics (:mod:`meshcorr.core.geodesics`, the heat
 method on clouds), the Laplace-Beltrami operator and vertex areas
 (:mod:`meshcorr.core.laplacian`), normals and their outward orientation
-(:mod:`meshcorr.core.normals`, through :mod:`meshcorr.choice.orientation`), and the
+(:mod:`meshcorr.core.normals`, through :mod:`meshcorr.core.orientation`), and the
 graph of neighbouring vertices (:func:`edges`, here).
 
 Two neighbourhoods are used:
@@ -33,7 +33,7 @@ from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
 from ..errors import MeshError
-from .validate import _as_array, _check_finite, _plural, _which
+from .validate import as_array, check_finite, plural, which
 
 __all__ = ["N_NEIGHBORS", "RING_NEIGHBORS", "MIN_POINTS", "edges", "knn_graph", "triangulation_failed",
            "validate_cloud"]
@@ -157,8 +157,8 @@ def _check_duplicates(points: np.ndarray, name: str) -> None:
     repeats = np.flatnonzero(first[inverse.ravel()] != np.arange(len(points)))
     if len(repeats):
         raise MeshError(
-            f"{name}: {_plural(len(repeats), 'point')} repeat{'s' if len(repeats) == 1 else ''} an earlier "
-            f"point ({_which('point', 'points', repeats)}); a point cloud needs distinct points (the "
+            f"{name}: {plural(len(repeats), 'point')} repeat{'s' if len(repeats) == 1 else ''} an earlier "
+            f"point ({which('point', 'points', repeats)}); a point cloud needs distinct points (the "
             "neighbourhoods of its Laplacian and geodesics degenerate). Remove the duplicates first "
             "(e.g. numpy.unique(points, axis=0), or MeshLab: Filters > Cleaning and Repairing > "
             "Remove Duplicate Vertices).")
@@ -220,7 +220,7 @@ def validate_cloud(points, *, min_vertices: int = 3, largest_component: bool = F
     MeshError
         Naming the problem, the points concerned and the fix.
     """
-    points = _as_array(points, "points", "(n, 3)", "Pass one row of x, y, z coordinates per point.", name)
+    points = as_array(points, "points", "(n, 3)", "Pass one row of x, y, z coordinates per point.", name)
     if points.size == 0:
         raise MeshError(f"{name} is empty: it has no points. Check that the file holds a mesh or a point cloud.")
     if points.ndim != 2 or points.shape[1] != 3:
@@ -229,7 +229,7 @@ def validate_cloud(points, *, min_vertices: int = 3, largest_component: bool = F
     if not np.issubdtype(points.dtype, np.number) or np.iscomplexobj(points):
         raise MeshError(f"{name}: point coordinates must be real numbers; got dtype {points.dtype}.")
     points = np.array(points, dtype=np.float64)
-    _check_finite(points, name)
+    check_finite(points, name)
     fewest = max(MIN_POINTS, int(min_vertices))
 
     def check_count(count: int) -> None:

@@ -84,11 +84,38 @@ def farthest_point_sampling(distances_from: RowFn, n_vertices: int, n_landmarks:
     """
     n_vertices = check_int("n_vertices", n_vertices, minimum=1)
     m = check_int("n_landmarks", n_landmarks, minimum=1, maximum=n_vertices)
+    rows = np.empty((m, n_vertices))
+    indices, radii = _greedy(distances_from, n_vertices, m, _first(start, n_vertices, random_state), rows)
+    return Landmarks(indices, rows, radii)
+
+
+def farthest_point_indices(distances_from: RowFn, n_vertices: int, n_landmarks: int, *,
+                           start: int | None = None, random_state: int | None = 0
+                           ) -> tuple[np.ndarray, np.ndarray]:
+    """``(m,)`` int landmarks and ``(m,)`` covering radii of :func:`farthest_point_sampling`, rows not kept.
+
+    The same greedy sampling in ``O(n)`` memory (the distance rows are
+    dropped once used): for samples of many points. Parameters as
+    :func:`farthest_point_sampling`; ``distances_from`` may give any
+    distance that orders points as the metric does (e.g. squared
+    Euclidean), and the radii are then in its units.
+    """
+    n_vertices = check_int("n_vertices", n_vertices, minimum=1)
+    m = check_int("n_landmarks", n_landmarks, minimum=1, maximum=n_vertices)
+    return _greedy(distances_from, n_vertices, m, _first(start, n_vertices, random_state), None)
+
+
+def _first(start: int | None, n_vertices: int, random_state: int | None) -> int:
+    """The first landmark: ``start``, checked, or drawn with ``random_state``."""
     if start is None:
         start = int(np.random.default_rng(random_state).integers(n_vertices))
-    start = check_int("start", start, minimum=0, maximum=n_vertices - 1)
+    return check_int("start", start, minimum=0, maximum=n_vertices - 1)
+
+
+def _greedy(distances_from: RowFn, n_vertices: int, m: int, start: int,
+            rows: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """The greedy loop (module docstring): ``(m,)`` landmarks and radii; each row into ``rows`` if given."""
     indices = np.empty(m, dtype=np.int64)
-    rows = np.empty((m, n_vertices))
     radii = np.empty(m)
     nearest = np.full(n_vertices, np.inf)
     current = start
@@ -96,11 +123,12 @@ def farthest_point_sampling(distances_from: RowFn, n_vertices: int, n_landmarks:
         indices[t] = current
         row = np.maximum(np.asarray(distances_from(current), dtype=np.float64), 0.0)
         row[current] = 0.0
-        rows[t] = row
+        if rows is not None:
+            rows[t] = row
         np.minimum(nearest, row, out=nearest)
         # Chosen vertices must not come back, even if a solver gives them a
         # tiny positive distance to themselves.
         nearest[indices[:t + 1]] = -np.inf
         current = int(np.argmax(nearest))
         radii[t] = max(float(nearest[current]), 0.0)
-    return Landmarks(indices, rows, radii)
+    return indices, radii

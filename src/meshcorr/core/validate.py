@@ -20,21 +20,22 @@ from scipy.sparse.csgraph import connected_components
 
 from meshcorr.errors import MeshError, ParameterError
 
-__all__ = ["validate_mesh"]
+__all__ = ["as_array", "check_finite", "check_vertex_count", "pinched_vertices", "plural", "select_component",
+           "validate_mesh", "which"]
 
 _SHOW = 5  # how many offending indices a message lists
 _AREA_RTOL = 1e-12  # zero area: area <= _AREA_RTOL * bbox_diagonal**2
 _MESHLAB = "MeshLab: Filters > Cleaning and Repairing > "
 
 
-def _which(word: str, words: str, indices) -> str:
+def which(word: str, words: str, indices) -> str:
     """``"vertex 3"`` or ``"vertices 3, 7, 9, ..."``: the first few of ``indices``."""
     indices = np.ravel(indices)
     shown = ", ".join(str(int(i)) for i in indices[:_SHOW])
     return f"{word if len(indices) == 1 else words} {shown}{', ...' if len(indices) > _SHOW else ''}"
 
 
-def _plural(count: int, word: str, words: str | None = None) -> str:
+def plural(count: int, word: str, words: str | None = None) -> str:
     """``"1 face"``, ``"2 faces"``; ``words`` is the plural when not ``word + "s"``."""
     return f"{count} {word if count == 1 else (words or word + 's')}"
 
@@ -51,8 +52,11 @@ def _first_bad_row(rows) -> str:
     return ""
 
 
-def _as_array(values, what: str, shape: str, fix: str, name: str) -> np.ndarray:
-    """``np.asarray(values)``; a ragged list (rows of different lengths) raises :class:`MeshError`."""
+def as_array(values, what: str, shape: str, fix: str, name: str) -> np.ndarray:
+    """``np.asarray(values)``; a ragged list (rows of different lengths) raises :class:`MeshError`.
+
+    ``what`` and ``shape`` (e.g. ``"vertices"``, ``"(n, 3)"``) and ``fix`` (the advice) word the message.
+    """
     try:
         return np.asarray(values)
     except ValueError as error:  # numpy >= 1.24: "inhomogeneous shape"
@@ -64,9 +68,9 @@ def _as_array(values, what: str, shape: str, fix: str, name: str) -> np.ndarray:
 
 def _as_arrays(vertices, faces, name: str) -> tuple[np.ndarray, np.ndarray]:
     """Convert to float64 (n, 3) and int64 (m, 3) arrays, checking emptiness and shapes."""
-    vertices = _as_array(vertices, "vertices", "(n, 3)",
+    vertices = as_array(vertices, "vertices", "(n, 3)",
                          "Pass one row of x, y, z coordinates per vertex.", name)
-    faces = _as_array(faces, "faces", "(m, 3)",
+    faces = as_array(faces, "faces", "(m, 3)",
                       "faces must be triangles; triangulate polygons first.", name)
     if vertices.size == 0 or faces.size == 0:
         what = "no vertices" if vertices.size == 0 else "no faces"
@@ -99,12 +103,13 @@ def _as_arrays(vertices, faces, name: str) -> tuple[np.ndarray, np.ndarray]:
     return np.array(vertices, dtype=np.float64), np.array(faces, dtype=np.int64)
 
 
-def _check_finite(vertices: np.ndarray, name: str) -> None:
+def check_finite(vertices: np.ndarray, name: str) -> None:
+    """Refuse ``(n, 3)`` coordinates with NaN or inf in any row (:class:`MeshError` naming the first rows)."""
     bad = np.flatnonzero(~np.isfinite(vertices).all(axis=1))
     if len(bad):
         raise MeshError(
-            f"{name}: NaN or inf coordinates in {_plural(len(bad), 'vertex', 'vertices')} "
-            f"({_which('vertex', 'vertices', bad)}). "
+            f"{name}: NaN or inf coordinates in {plural(len(bad), 'vertex', 'vertices')} "
+            f"({which('vertex', 'vertices', bad)}). "
             "Remove or repair these vertices before matching."
         )
 
@@ -114,9 +119,9 @@ def _check_index_range(faces: np.ndarray, n_vertices: int, name: str) -> None:
     if len(bad):
         values = faces[bad][(faces[bad] < 0) | (faces[bad] >= n_vertices)]
         raise MeshError(
-            f"{name}: {_plural(len(bad), 'face')} with vertex indices outside "
-            f"[0, {n_vertices - 1}] ({_which('face', 'faces', bad)}; "
-            f"{_which('index', 'indices', values)}). "
+            f"{name}: {plural(len(bad), 'face')} with vertex indices outside "
+            f"[0, {n_vertices - 1}] ({which('face', 'faces', bad)}; "
+            f"{which('index', 'indices', values)}). "
             "Face indices must be 0-based and refer to the given vertices."
         )
 
@@ -137,10 +142,10 @@ def _check_degenerate(vertices: np.ndarray, faces: np.ndarray, name: str) -> Non
     bad = np.flatnonzero(repeated | zero_area)
     if len(bad):
         raise MeshError(
-            f"{name}: {_plural(len(bad), 'degenerate face')} "
+            f"{name}: {plural(len(bad), 'degenerate face')} "
             f"({int(repeated.sum())} with a repeated vertex index, "
             f"{int((zero_area & ~repeated).sum())} with zero area; "
-            f"{_which('face', 'faces', bad)}). "
+            f"{which('face', 'faces', bad)}). "
             "Remove degenerate faces / clean the mesh first "
             f"(e.g. {_MESHLAB}Remove Zero Area Faces)."
         )
@@ -227,8 +232,8 @@ def _check_manifold(faces: np.ndarray, n_vertices: int, name: str) -> None:
     repeats = np.flatnonzero(_repeated_rows(np.sort(faces, axis=1), n_vertices))
     if len(repeats):
         raise MeshError(
-            f"{name} is non-manifold: {_plural(len(repeats), 'duplicate face')} "
-            f"({_which('face', 'faces', repeats)} repeat{'s' if len(repeats) == 1 else ''} "
+            f"{name} is non-manifold: {plural(len(repeats), 'duplicate face')} "
+            f"({which('face', 'faces', repeats)} repeat{'s' if len(repeats) == 1 else ''} "
             "the vertices of an earlier face). "
             f"Remove duplicate faces first (e.g. {_MESHLAB}Remove Duplicate Faces)."
         )
@@ -245,22 +250,29 @@ def _check_manifold(faces: np.ndarray, n_vertices: int, name: str) -> None:
         shown = ", ".join(f"({i}, {j})" for i, j in bad[:_SHOW])
         shown += ", ..." if len(bad) > _SHOW else ""
         raise MeshError(
-            f"{name} is non-manifold: {_plural(len(bad), 'edge')} shared by more than "
+            f"{name} is non-manifold: {plural(len(bad), 'edge')} shared by more than "
             f"2 faces ({'edge' if len(bad) == 1 else 'edges'} {shown}). {fix_edges}"
         )
     bad = _pinched(faces, n_vertices, corners, start, counts)
     if len(bad):
         raise MeshError(
-            f"{name} is non-manifold: {_plural(len(bad), 'vertex', 'vertices')} "
+            f"{name} is non-manifold: {plural(len(bad), 'vertex', 'vertices')} "
             "where separate sheets of faces touch at a single point "
-            f"({_which('vertex', 'vertices', bad)}). "
+            f"({which('vertex', 'vertices', bad)}). "
             f"Repair the mesh first (e.g. {_MESHLAB}Repair non Manifold Vertices)."
         )
 
 
-def _select_component(
+def select_component(
     vertices: np.ndarray, faces: np.ndarray, largest_component: bool, name: str
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(n', 3)`` vertices, ``(m', 3)`` faces and ``(n',)`` kept indices of the mesh's one connected surface.
+
+    Without ``largest_component`` a mesh with unreferenced vertices or several
+    components raises :class:`MeshError`; with it, the component with the most
+    vertices is kept (ties: the one holding the lowest vertex index) and the
+    faces are reindexed into it (``vertices[kept]``).
+    """
     n = len(vertices)
     referenced = np.bincount(faces.ravel(), minlength=n) > 0
     edges, _ = _edges(faces)
@@ -270,8 +282,8 @@ def _select_component(
     unreferenced = np.flatnonzero(~referenced)
     if not largest_component and len(unreferenced):
         raise MeshError(
-            f"{name}: {_plural(len(unreferenced), 'vertex', 'vertices')} "
-            f"used by no face ({_which('vertex', 'vertices', unreferenced)}). "
+            f"{name}: {plural(len(unreferenced), 'vertex', 'vertices')} "
+            f"used by no face ({which('vertex', 'vertices', unreferenced)}). "
             "Remove unreferenced vertices "
             f"(e.g. {_MESHLAB}Remove Unreferenced Vertices), or pass --largest-component "
             "(CLI) / largest_component=True (API) to drop them."
@@ -355,16 +367,16 @@ def validate_mesh(
             f"Got {min_vertices!r} instead."
         )
     vertices, faces = _as_arrays(vertices, faces, name)
-    _check_finite(vertices, name)
+    check_finite(vertices, name)
     _check_index_range(faces, len(vertices), name)
     _check_degenerate(vertices, faces, name)
     _check_manifold(faces, len(vertices), name)
-    vertices, faces, kept = _select_component(vertices, faces, largest_component, name)
-    _check_vertex_count(len(vertices), min_vertices, name, reason)
+    vertices, faces, kept = select_component(vertices, faces, largest_component, name)
+    check_vertex_count(len(vertices), min_vertices, name, reason)
     return vertices, faces, kept
 
 
-def _check_vertex_count(n_vertices: int, min_vertices: int, name: str, reason: str = "") -> None:
+def check_vertex_count(n_vertices: int, min_vertices: int, name: str, reason: str = "") -> None:
     """Refuse a mesh of fewer than ``min_vertices`` vertices (:class:`MeshError`, ``reason`` says why)."""
     if n_vertices < min_vertices:
         why = f": {reason.rstrip('.')}" if reason else ""

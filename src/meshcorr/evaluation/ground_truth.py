@@ -29,6 +29,7 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import InputError
+from ..io.indices import index_fields, read_index_lines
 
 __all__ = ["GroundTruth", "identity_truth", "load_ground_truth", "read_pairs", "read_vts"]
 
@@ -99,30 +100,6 @@ def identity_truth(n_source: int, n_target: int) -> GroundTruth:
         )
     index = np.arange(n_source, dtype=np.int64)
     return GroundTruth(index, index, "identity")
-
-
-def read_index_lines(path: Path, kind: str = "ground-truth") -> list[tuple[int, str]]:
-    """The non-blank lines of a plain-text index file, ``#`` comments removed, with their numbers.
-
-    Raises :class:`InputError` naming ``kind`` for a missing or non-text file;
-    an empty list for a file with no data lines.
-    """
-    if not path.is_file():
-        raise InputError(f"No such {kind} file: {path}" if not path.exists() else f"Not a file: {path}")
-    try:
-        text = path.read_text(encoding="ascii")
-    except UnicodeDecodeError as exc:
-        raise InputError(f"{path}: a {kind} file must be plain text.") from exc
-    lines = [(number, line.split("#", 1)[0].strip()) for number, line in enumerate(text.splitlines(), 1)]
-    return [(number, line) for number, line in lines if line]
-
-
-def index_fields(line: str) -> list[int] | None:
-    """The integers of a line split at spaces, commas, colons or semicolons; None if one is not an integer."""
-    fields = [f for f in re.split(r"[\s,:;]+", line) if f]
-    if not all(re.fullmatch(r"[+-]?\d{1,18}", f) for f in fields):
-        return None
-    return [int(f) for f in fields]
 
 
 def _read_lines(path: Path, kind: str = "ground-truth") -> list[tuple[int, str]]:

@@ -46,7 +46,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..runtime.checks import check_choice, check_float, check_int
+from ..runtime.checks import MapMessages, check_choice, check_float, check_int, check_vertex_map
 from ..errors import ParameterError
 from ..core.geodesics import GEODESIC_METHODS, geodesic_solver
 from .ground_truth import GroundTruth
@@ -304,25 +304,23 @@ def cumulative_curve(errors: np.ndarray, thresholds: np.ndarray | None = None
     return thresholds, np.searchsorted(finite, thresholds, side="right") / errors.size
 
 
+#: The words of a map that :func:`evaluate_map` refuses (:func:`meshcorr.runtime.checks.check_vertex_map`).
+_EVALUATED_MAP = MapMessages(
+    not_integer="A map must be a 1-D integer array; got shape {shape} and dtype {dtype}.",
+    wrong_length="",  # the length is checked against the ground truth below
+    out_of_range="Map entry {entry} is {value}, outside the target's vertices 0..{last} (-1 marks unmapped). "
+                 "Check that the map points into this target.")
+
+
 def _check_mapping(mapping: np.ndarray, truth: GroundTruth, n_target: int) -> np.ndarray:
-    mapping = np.asarray(mapping)
-    if mapping.ndim != 1 or not np.issubdtype(mapping.dtype, np.integer):
-        raise ParameterError(f"A map must be a 1-D integer array; got shape {mapping.shape} "
-                             f"and dtype {mapping.dtype}.")
-    mapping = mapping.astype(np.int64)
+    """``mapping`` as ``(n,)`` int64, checked against the ground truth's source vertices and the target."""
+    mapping = check_vertex_map(mapping, messages=_EVALUATED_MAP).astype(np.int64)
     if len(truth) and truth.source.max() >= mapping.size:
         raise ParameterError(
             f"The ground truth names source vertex {int(truth.source.max())}, but the map has "
             f"only {mapping.size} entries. Check that map and ground truth belong together."
         )
-    bad = (mapping < -1) | (mapping >= n_target)
-    if bad.any():
-        first = int(np.flatnonzero(bad)[0])
-        raise ParameterError(
-            f"Map entry {first} is {int(mapping[first])}, outside the target's vertices "
-            f"0..{n_target - 1} (-1 marks unmapped). Check that the map points into this target."
-        )
-    return mapping
+    return check_vertex_map(mapping, n_target=n_target, messages=_EVALUATED_MAP)
 
 
 def _truth_errors(mesh: Mesh, mapping: np.ndarray, truth: GroundTruth,
@@ -467,11 +465,10 @@ def map_quality(source: MeshLike, target: MeshLike, mapping: np.ndarray) -> dict
     """
     from ..core.laplacian import vertex_areas
     from ..core.pointcloud import edges as graph_edges
-    from ..maps.transfer import check_map
 
     src = source if isinstance(source, Mesh) else as_mesh(source, name="source")
     tgt = _target_mesh(target)
-    mapping = check_map(mapping, src.n_vertices, tgt.n_vertices)
+    mapping = check_vertex_map(mapping, src.n_vertices, tgt.n_vertices)
     mapped = mapping >= 0
     if not mapped.any():
         raise ParameterError("The map sends no source vertex anywhere; there is nothing to measure.")

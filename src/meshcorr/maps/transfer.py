@@ -18,57 +18,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError, ParameterError
+from ..runtime.checks import check_vertex_map as check_map  # the one check of a vertex map, named as before
 
 __all__ = ["check_map", "pull_back", "read_attribute", "transfer_attribute", "write_values"]
 
 #: What an attribute file holds, for the messages that refuse one.
 _NUMBERS = "give one number (a scalar field) or 3-4 colour channels (0-255) per target vertex."
-
-
-def check_map(mapping, n_source: int, n_target: int, *, name: str = "map") -> np.ndarray:
-    """Check that a vertex map fits a source and a target mesh.
-
-    Parameters
-    ----------
-    mapping : (n_source,) int
-        ``mapping[i]`` is the target vertex of source vertex ``i``, or -1
-        where the source vertex was not mapped.
-    n_source, n_target : int
-        Vertex counts of the two meshes.
-    name : str
-        How messages refer to the map (e.g. its file name).
-
-    Returns
-    -------
-    mapping : (n_source,) int64
-
-    Raises
-    ------
-    ParameterError
-        If the map is not 1-D integer, has a length other than
-        ``n_source``, or holds an index outside ``[-1, n_target)``.
-    """
-    mapping = np.asarray(mapping)
-    if mapping.ndim != 1 or not np.issubdtype(mapping.dtype, np.integer):
-        raise ParameterError(
-            f"{name} must be a 1-D array of integer vertex indices. "
-            f"Got shape {mapping.shape} and dtype {mapping.dtype} instead."
-        )
-    if len(mapping) != n_source:
-        raise ParameterError(
-            f"{name} has {len(mapping)} entries but the source mesh has {n_source} vertices: "
-            "a map needs one target index per source vertex. Check the order of SOURCE and "
-            "TARGET (the map goes from SOURCE to TARGET) and that the map belongs to these meshes."
-        )
-    bad = (mapping < -1) | (mapping >= n_target)
-    if bad.any():
-        first = int(np.flatnonzero(bad)[0])
-        raise ParameterError(
-            f"{name} entry {first} is {int(mapping[first])}, outside the target's vertex range "
-            f"0..{n_target - 1} (-1 marks an unmapped vertex). Check that the map belongs to "
-            "these meshes and that SOURCE and TARGET are not swapped."
-        )
-    return mapping.astype(np.int64, copy=False)
 
 
 def pull_back(values, mapping, *, fill=np.nan) -> np.ndarray:

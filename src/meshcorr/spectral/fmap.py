@@ -40,7 +40,10 @@ import numpy as np
 from ..runtime.checks import check_int
 from ..errors import InputError, ParameterError
 from ..core.mesh import Mesh
-from ..stages.refine import _nearest_rows, laplace_basis
+from ..runtime.checks import check_vertex_map
+from ..io.arrays import read_npz, write_npz
+from .basis import laplace_basis
+from .nearest import nearest_rows
 
 __all__ = ["FunctionalMap", "laplace_beltrami", "functional_map", "point_map"]
 
@@ -63,7 +66,7 @@ def laplace_beltrami(mesh: Mesh, k: int, *, random_state: int | None = 0
         Ascending, of :math:`L \\phi = \\lambda M \\phi` (cotangent Laplacian, unit area).
     basis : (n, k) float, read-only
         :math:`\\Phi^\\top M \\Phi = I` for the mass below; signs by
-        :func:`meshcorr.spectral.embedding.sign_convention` (:func:`meshcorr.stages.refine.laplace_basis`).
+        :func:`meshcorr.spectral.embedding.sign_convention` (:func:`meshcorr.spectral.basis.laplace_basis`).
     mass : (n,) float
         Lumped (barycentric) vertex areas divided by the total area: they sum to 1
         (:func:`meshcorr.core.laplacian.vertex_areas`, also for point clouds).
@@ -126,8 +129,6 @@ class FunctionalMap:
 
     def save(self, path: str | os.PathLike) -> None:
         """Write every array to one ``.npz`` file, atomically (names as the attributes)."""
-        from ..io import write_npz
-
         write_npz(path, {name: getattr(self, name) for name in self.__dataclass_fields__})
 
     @classmethod
@@ -139,8 +140,6 @@ class FunctionalMap:
         InputError
             If the file is missing, unreadable, lacks an array or its shapes disagree.
         """
-        from ..io import read_npz
-
         arrays = read_npz(path, "a functional map file")  # ParameterError if missing or unreadable
         missing = [name for name in cls.__dataclass_fields__ if name not in arrays]
         if missing:
@@ -182,9 +181,7 @@ def functional_map(source: Mesh, target: Mesh, mapping: np.ndarray, k: int = 30,
     k = check_int("k", k, minimum=1, maximum=max(1, min(source.n_vertices, target.n_vertices) - 1))
     k_target = k if k_target is None else check_int("k_target", k_target, minimum=1,
                                                     maximum=max(1, target.n_vertices - 1))
-    from ..maps.transfer import check_map
-
-    mapping = check_map(mapping, source.n_vertices, target.n_vertices)
+    mapping = check_vertex_map(mapping, source.n_vertices, target.n_vertices)
     values_s, phi_s, mass_s = laplace_beltrami(source, max(k, 2), random_state=random_state)
     values_t, phi_t, mass_t = laplace_beltrami(target, max(k_target, 2), random_state=random_state)
     phi_s, phi_t, values_s, values_t = phi_s[:, :k], phi_t[:, :k_target], values_s[:k], values_t[:k_target]
@@ -214,4 +211,4 @@ def point_map(C: np.ndarray, source_basis: np.ndarray, target_basis: np.ndarray)
     for name, array in (("C", C), ("source_basis", source_basis), ("target_basis", target_basis)):
         if not np.isfinite(array).all():  # NaN distances made every vertex map to vertex 0
             raise ParameterError(f"{name} holds NaN or infinite values; a functional map needs finite numbers.")
-    return _nearest_rows(np.asarray(source_basis) @ C, np.asarray(target_basis))
+    return nearest_rows(np.asarray(source_basis) @ C, np.asarray(target_basis))

@@ -28,7 +28,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import InputError, LandmarkError, ParameterError
-from ..evaluation.ground_truth import index_fields, read_index_lines
+from ..io.indices import index_fields, read_index_lines
 from ..core.mesh import Mesh
 
 RowFn = Callable[[int], np.ndarray]

@@ -23,7 +23,7 @@ For :math:`k = k_0 < \\dots < K`, given the current map :math:`T`:
 - **rigid motion**: the orthogonal motion and translation that best move the
   source shell onto the target shell's images (Kabsch, weighted by vertex
   area): the shapes may come in any position. It is a rotation when the
-  given map keeps the orientation (:func:`meshcorr.choice.orientation.orientation_score`
+  given map keeps the orientation (:func:`meshcorr.core.orientation.orientation_score`
   >= 0.5, decided once for the whole map) and a reflection when it mirrors
   it (the deformed normals are then turned): the stage refines the map it is
   given, it does not choose between mirror images;
@@ -80,8 +80,11 @@ from ..runtime.threads import parallel_map
 from ..errors import ParameterError
 from ..core.laplacian import vertex_areas
 from ..core.mesh import Mesh
-from ..choice.orientation import mesh_orientation, orientation_score, vertex_normals
-from .refine import _basis_size, check_vertex_map, laplace_basis, nearest_vertices, orthogonal_fit, pair_bases
+from ..core.orientation import mesh_orientation, orientation_score, vertex_normals
+from ..runtime.checks import check_vertex_map
+from ..spectral.basis import basis_size, laplace_basis, orthogonal_fit, pair_bases
+from ..spectral.nearest import nearest_vertices
+from .refine import REFINED_MAP
 
 #: Weight of the shells' unit normals against coordinates of a unit-area shape.
 NORMAL_WEIGHT = 0.3
@@ -129,7 +132,7 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
     landmarks : (L, 2) int, optional
         Known (source, target) vertex pairs, held in the map at every step.
     orientation : float, optional
-        The given map's :func:`~meshcorr.choice.orientation.orientation_score` with
+        The given map's :func:`~meshcorr.core.orientation.orientation_score` with
         the same ``random_state``, when the caller has it (it decides between
         a rotation and a reflection); measured here when None.
     descriptors : ((n1, d), (n2, d)) float, optional
@@ -165,11 +168,12 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
         raise ParameterError("Shell refinement needs triangle meshes (the shells' normals need faces); "
                              "point clouds keep the ZoomOut map.")
     n1 = source.n_vertices
-    mapping = check_vertex_map(mapping, source, target).astype(np.int64)  # a copy, refined in place
+    mapping = check_vertex_map(mapping, source.n_vertices, target.n_vertices, messages=REFINED_MAP)
+    mapping = mapping.astype(np.int64)  # a copy, refined in place
     n_sample = check_int("n_sample", n_sample, minimum=1)
     if descriptors is not None:
         descriptors = _checked_descriptors(descriptors, n1, target.n_vertices)
-    k = _basis_size(k, source, target)
+    k = basis_size(k, source, target)
     part = part_fraction is not None
     if part:
         part_fraction = check_float("part_fraction", part_fraction, minimum=1e-3, maximum=1.0)
@@ -327,5 +331,5 @@ def _low_pass(basis: np.ndarray, mass: np.ndarray, coords: np.ndarray) -> np.nda
 
 
 def _normals(coords: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Area-weighted unit vertex normals of a shell (:func:`meshcorr.choice.orientation.vertex_normals`)."""
+    """Area-weighted unit vertex normals of a shell (:func:`meshcorr.core.orientation.vertex_normals`)."""
     return vertex_normals(coords, faces)[0]

@@ -1,0 +1,167 @@
+"""Writing files: atomically, several together, and checking output paths before any work.
+
+Every file is written atomically: to a temporary file in the same directory,
+then moved over the target with :func:`os.replace` (:func:`atomic_write`);
+:func:`check_outputs` refuses output paths that cannot be written (or are
+inputs) before any work, and :func:`staged_writes` moves several outputs into
+place only once all are written.
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+import stat
+from contextlib import contextmanager
+from contextvars import ContextVar
+from pathlib import Path
+from typing import BinaryIO, Callable
+
+from ..errors import OutputError
+
+__all__ = ["atomic_write", "check_outputs", "staged_writes"]
+
+#: The (temporary file, target) pairs of the innermost :func:`staged_writes` block, if any.
+_STAGED: ContextVar[list | None] = ContextVar("meshcorr_staged_writes", default=None)
+
+
+def check_outputs(outputs: dict, inputs: dict | None = None) -> None:
+    """Refuse, before any work, output paths that cannot or must not be written.
+
+    Checked for each output: it is not the path of an input (compared as
+    real paths, and as the same file where both exist), no two outputs share
+    a path, its folder exists and a file can be created there (a probe file
+    is made and removed: this catches read-only file systems and ``/proc``),
+    and an existing file there is a regular file that may be replaced (not
+    read-only, not immutable). ``"-"`` (stdout) and ``None`` are skipped.
+
+    Parameters
+    ----------
+    outputs : dict of str -> path
+        What each output is (``"-o"``, ``"--report"``, ...) and where it goes.
+    inputs : dict of str -> path, optional
+        The input files, named the same way.
+
+    Raises
+    ------
+    OutputError
+        Naming the option, the path and the fix.
+    """
+    inputs = {what: Path(path) for what, path in (inputs or {}).items() if path is not None}
+    seen: dict[str, str] = {}
+    for what, path in outputs.items():
+        if path is None or str(path) == "-":
+            continue
+        path = Path(path)
+        real = os.path.realpath(path)
+        for source, input_path in inputs.items():
+            if real == os.path.realpath(input_path) or (path.exists() and input_path.exists()
+                                                        and os.path.samefile(path, input_path)):
+                raise OutputError(f"{what} {path} is the input {source}: writing there would replace it. "
+                                  "Give another output path.")
+        if real in seen:
+            raise OutputError(f"{what} and {seen[real]} are the same file ({path}): one would overwrite the "
+                              "other. Give them different paths.")
+        seen[real] = what
+        folder = path.parent
+        if not folder.is_dir():
+            raise OutputError(f"Cannot write {what} {path}: the folder {folder} does not exist. Create it first.")
+        if path.is_dir():
+            raise OutputError(f"Cannot write {what} {path}: it is a folder. Give a file name such as map.txt.")
+        if path.exists() and not stat.S_ISREG(path.stat().st_mode):
+            raise OutputError(f"Cannot write {what} {path}: it exists and is not a regular file "
+                              "(a device or a pipe); give a file path.")
+        if path.exists() and not os.access(path, os.W_OK):
+            raise OutputError(f"Cannot write {what} {path}: the file exists and cannot be replaced "
+                              "(read-only or immutable). Remove it or give another path.")
+        probe = folder / f".{path.name}.{secrets.token_hex(6)}.probe"
+        try:
+            os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
+            os.unlink(probe)
+        except OSError as exc:
+            raise OutputError(f"Cannot write {what} {path}: no file can be created in {folder} "
+                              f"({exc.strerror}). Give a path in a writable folder.") from exc
+
+
+@contextmanager
+def staged_writes():
+    """Let the writes inside the block appear together at its end, or not at all.
+
+    Inside the block :func:`atomic_write` (and so :func:`write_map`,
+    :func:`write_mesh` and the report writer) writes each file to its
+    temporary file only. When the block ends normally the temporary files
+    are moved over their targets, in the order written; when it raises
+    (including KeyboardInterrupt) they are removed and no target changes.
+    """
+    staged: list = []
+    token = _STAGED.set(staged)
+    try:
+        yield
+    except BaseException:
+        _STAGED.reset(token)
+        for temp, _ in staged:
+            temp.unlink(missing_ok=True)
+        raise
+    _STAGED.reset(token)
+    try:
+        for index, (temp, path) in enumerate(staged):
+            _replace(temp, path)
+    except BaseException:
+        for temp, _ in staged[index:]:
+            temp.unlink(missing_ok=True)
+        raise
+
+
+def _replace(temp: Path, path: Path) -> None:
+    try:
+        os.replace(temp, path)
+    except OSError as exc:
+        temp.unlink(missing_ok=True)
+        raise OutputError(f"Cannot write {path}: {exc.strerror}.") from exc
+
+
+def atomic_write(path, writer: Callable[[BinaryIO], object]) -> None:
+    """Write a file atomically: all of it appears at ``path``, or nothing changes.
+
+    ``writer`` writes into a temporary file in the same directory, opened in
+    binary mode; the temporary file then replaces ``path`` with
+    :func:`os.replace` (inside :func:`staged_writes`: when that block ends).
+    If ``writer`` raises, the temporary file is removed and ``path`` is left
+    as it was.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file to create or replace.
+    writer : callable
+        Called as ``writer(file)`` with a binary file object.
+
+    Raises
+    ------
+    OutputError
+        If the directory of ``path`` does not exist or the file cannot be
+        created there (a :class:`ParameterError`).
+    """
+    path = Path(path)
+    directory = path.parent
+    if not directory.is_dir():
+        raise OutputError(f"Cannot write {path}: directory {directory} does not exist.")
+    temp = directory / f".{path.name}.{secrets.token_hex(6)}.tmp"
+    try:
+        # os.open applies the umask, so the final file gets ordinary permissions.
+        fd = os.open(temp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)
+    except OSError as exc:
+        raise OutputError(f"Cannot write {path}: no file can be created in {directory} ({exc.strerror}).") from exc
+    try:
+        with os.fdopen(fd, "wb") as file:
+            writer(file)
+            file.flush()
+            os.fsync(file.fileno())
+    except BaseException:
+        temp.unlink(missing_ok=True)
+        raise
+    staged = _STAGED.get()
+    if staged is not None:
+        staged.append((temp, path))
+    else:
+        _replace(temp, path)

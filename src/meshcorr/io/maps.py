@@ -1,0 +1,100 @@
+"""Vertex-map files: ``.npy`` (:func:`numpy.save`) or text with one integer per line.
+
+A map ``mapping`` ``(n,)`` int sends source vertex ``i`` to target vertex
+``mapping[i]`` (-1: unmapped); :func:`write_map` writes it atomically and
+:func:`read_map` reads it back.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..runtime.checks import MapMessages, check_vertex_map
+from .arrays import load_npy
+from .files import atomic_write
+
+__all__ = ["map_text", "read_map", "write_map"]
+
+#: The words of a map that :func:`write_map` refuses (:func:`meshcorr.runtime.checks.check_vertex_map`).
+_WRITTEN_MAP = MapMessages(
+    not_integer="The 'mapping' parameter of write_map must be a 1-D integer array. "
+                "Got shape {shape} and dtype {dtype} instead.",
+    wrong_length="", out_of_range="")  # write_map checks no vertex counts
+
+
+def write_map(path, mapping) -> None:
+    """Write a vertex map atomically: ``.npy`` with :func:`numpy.save`, else one integer per line.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Target file. ``.npy`` gives a NumPy file; any other extension
+        (``.txt``, ``.map``, none) gives text with one integer per line.
+    mapping : (n,) int
+        The map, e.g. ``p2p_21[i]`` = vertex of mesh 1 matched to vertex ``i`` of mesh 2.
+    """
+    mapping = check_vertex_map(mapping, messages=_WRITTEN_MAP)
+    if Path(path).suffix.lower() == ".npy":
+        atomic_write(path, lambda file: np.save(file, mapping, allow_pickle=False))
+    else:
+        text = map_text(mapping)
+        atomic_write(path, lambda file: file.write(text.encode("ascii")))
+
+
+def map_text(mapping) -> str:
+    """A vertex map as the text :func:`write_map` writes: one integer per line."""
+    return "".join(f"{value}\n" for value in np.asarray(mapping).tolist())
+
+
+def read_map(path, *, name: str | None = None) -> np.ndarray:
+    """Read a vertex map written by :func:`write_map` (``.npy`` or one integer per line).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The map file. Blank lines in text files are ignored.
+    name : str, optional
+        What the file is, for messages (e.g. ``"MAP"``).
+
+    Returns
+    -------
+    mapping : (n,) int64
+
+    Raises
+    ------
+    InputError
+        If the file is missing or does not hold a 1-D array of integers
+        (a :class:`ParameterError`).
+    """
+    path = Path(path)
+    if not path.is_file():
+        which = f" ({name})" if name else ""
+        raise InputError(f"No such file: {path}{which}. Check the path." if not path.exists()
+                         else f"Not a file: {path}{which}; give a map file.")
+    if path.suffix.lower() == ".npy":
+        try:
+            mapping = load_npy(path)
+        except ValueError as exc:
+            raise InputError(f"{path}: could not be read as a .npy array ({exc}).") from exc
+        if mapping.ndim != 1 or not np.issubdtype(mapping.dtype, np.integer):
+            raise InputError(
+                f"{path}: a map must be a 1-D integer array; got shape {mapping.shape} "
+                f"and dtype {mapping.dtype}."
+            )
+        return mapping.astype(np.int64)
+    try:
+        lines = path.read_text(encoding="ascii").splitlines()
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{path}: not a text file (byte {exc.start} is not ASCII); a map file is text with "
+                         "one integer per line, or a .npy array.") from exc
+    numbered = [(i + 1, line.strip()) for i, line in enumerate(lines) if line.strip()]
+    for number, line in numbered:
+        if not re.fullmatch(r"[+-]?\d{1,18}", line):
+            raise InputError(
+                f"{path}, line {number}: expected one integer per line (at most 18 digits), got {line[:40]!r}."
+            )
+    return np.array([int(line) for _, line in numbered], dtype=np.int64)

@@ -25,7 +25,7 @@ from meshcorr import datasets as ds
 from meshcorr.evaluation.metrics import geodesic_errors
 from meshcorr.core.mesh import as_mesh
 from meshcorr.transfer import pull_back
-from meshcorr.viz.colors import UNMAPPED_COLOR, mesh_coloring
+from meshcorr.maps.colors import UNMAPPED_COLOR, mesh_coloring
 from meshcorr.viz.render import Panel, render_panels
 
 

@@ -203,17 +203,46 @@ def test_docstrings_cite_no_file_outside_the_repository():
     assert cited == []
 
 
-@pytest.mark.parametrize("old, new", [("refine", "meshcorr.stages.refine"), ("landmarks", "meshcorr.core.sampling"),
-                                      ("prepared", "meshcorr.shapes.prepared")])
-def test_old_flat_import_paths_warn_and_name_the_new_one(old, new):
+@pytest.mark.parametrize("old, new, name", [("refine", "meshcorr.stages.refine", "zoomout"),
+                                            ("landmarks", "meshcorr.core.sampling", "farthest_point_sampling"),
+                                            ("prepared", "meshcorr.shapes.prepared", "PreparedShape")])
+def test_old_flat_import_paths_warn_and_name_the_new_one(old, new, name, monkeypatch):
     import importlib
     import sys
 
     sys.modules.pop(f"meshcorr.{old}", None)
     with pytest.warns(DeprecationWarning, match=re.escape(new)):
         module = importlib.import_module(f"meshcorr.{old}")
-    assert module is importlib.import_module(new)
-    assert module.__name__ == new and module.__spec__.name == new  # pickles and relative imports unaffected
+    target = importlib.import_module(new)
+    assert module is target and getattr(module, name) is getattr(target, name)
+    assert target.__name__ == new and target.__spec__.name == new  # pickles and relative imports unaffected
+    monkeypatch.setattr(module, name, "patched")  # patching the old path patches the module users run
+    assert getattr(target, name) == "patched"
+
+
+@pytest.mark.filterwarnings(r"ignore:meshcorr\.\w+ moved to meshcorr\.[\w.]+; import meshcorr")
+@pytest.mark.parametrize("statement, home", [
+    ("from meshcorr.refine import laplace_basis", "meshcorr.spectral.basis.laplace_basis"),
+    ("from meshcorr.orientation import orientation_score", "meshcorr.core.map_orientation.orientation_score"),
+    ("from meshcorr.symmetry import Candidate", "meshcorr.choice.symmetry.ConfigurationCandidate"),
+    ("from meshcorr.collection import read_pairs", "meshcorr.collection.pairs.read_pair_list"),
+])
+def test_names_that_left_their_module_are_found_at_their_new_home_with_a_warning(statement, home):
+    import importlib
+
+    with pytest.warns(DeprecationWarning, match=re.escape(home)):
+        namespace: dict = {}
+        exec(statement, namespace)
+    module, _, attribute = home.rpartition(".")
+    value = [v for k, v in namespace.items() if not k.startswith("__")][0]
+    assert value is getattr(importlib.import_module(module), attribute)
+
+
+def test_an_unknown_name_of_an_old_path_is_an_import_error():
+    import meshcorr.stages.refine  # noqa: F401
+
+    with pytest.raises(ImportError, match="nothing_here"):
+        from meshcorr.refine import nothing_here  # noqa: F401
 
 
 def test_public_short_module_names_stay_without_a_warning(recwarn):

@@ -7,7 +7,7 @@ import pytest
 
 from meshcorr import datasets as ds
 from meshcorr.core.mesh import Mesh
-from meshcorr.core.orientation import orientation_score
+from meshcorr.core.map_orientation import orientation_score
 
 
 @pytest.fixture(scope="module")
@@ -78,7 +78,7 @@ def test_shared_neighbours_give_the_same_anchors_and_map():
 
 
 def test_orientation_scores_equal_the_two_scores_and_cache_the_regions(creature_pair):
-    from meshcorr.core.orientation import orientation_scores, regional_orientation
+    from meshcorr.core.map_orientation import orientation_scores, regional_orientation
 
     (V1, F1), (V2, F2) = creature_pair
     source, target = Mesh(V1, F1), Mesh(V2, F2)

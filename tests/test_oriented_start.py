@@ -5,9 +5,9 @@ import pytest
 
 from meshcorr.stages.landmarks import landmark_map
 from meshcorr.core.mesh import Mesh
-from meshcorr.core.orientation import orientation_score
+from meshcorr.core.map_orientation import orientation_score
 from meshcorr.choice.oriented_start import descriptors, fit_oriented_map, orientation_operators
-from meshcorr.stages.refine import laplace_basis
+from meshcorr.spectral.basis import laplace_basis
 from .test_selection import _geodesics, _person, _tip_vertex
 
 PLANAR_TIPS = ("head", "arm_l", "arm_r", "leg_l", "leg_r")  # all in the plane y = 0: front and back look alike

@@ -16,7 +16,7 @@ from meshcorr.errors import PartialityError, PartialShapeWarning, PreparedShapeE
 from meshcorr.evaluation.metrics import geodesic_errors
 from meshcorr.core.sampling import farthest_point_sampling
 from meshcorr.core.mesh import as_mesh
-from meshcorr.choice.orientation import orient_outward
+from meshcorr.core.orientation import orient_outward
 from meshcorr.pipeline.partial import match_part, matched_region
 from meshcorr.stages.part_checks import check_part_not_larger, geodesic_rows, partiality_suspicion
 

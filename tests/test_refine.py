@@ -16,8 +16,9 @@ import meshcorr
 from meshcorr import datasets as ds
 from meshcorr.errors import ParameterError
 from meshcorr.core.mesh import Mesh
-from meshcorr.core.orientation import orientation_score
-from meshcorr.stages.refine import laplace_basis, prefetch_bases, refine_map, zoomout
+from meshcorr.core.map_orientation import orientation_score
+from meshcorr.spectral.basis import laplace_basis, prefetch_bases
+from meshcorr.stages.refine import refine_map, zoomout
 
 
 @pytest.fixture(scope="module")

@@ -10,7 +10,7 @@ from meshcorr.errors import LandmarkError, ParameterError
 from meshcorr.choice.extremities import find_extremities, match_extremities
 from meshcorr.stages.landmarks import check_landmarks, landmark_map
 from meshcorr.core.mesh import Mesh, as_mesh
-from meshcorr.choice.orientation import orientation_score, regional_orientation
+from meshcorr.core.map_orientation import orientation_score, regional_orientation
 from meshcorr.choice.selection import ORIENTATION_MIN, MapCandidate, choose_map, energy, score_candidates
 from meshcorr.stages.shells import shell_refine
 
@@ -248,7 +248,7 @@ def test_the_orientation_counts_in_the_energy_of_maps_the_shells_refined():
 
 
 def test_a_map_with_swapped_legs_is_repaired_from_its_consistent_part(person):
-    from meshcorr.choice.orientation import consistent_vertices
+    from meshcorr.core.map_orientation import consistent_vertices
     from meshcorr.choice.repair import repair_candidates, repair_map
 
     mesh, mirror = person

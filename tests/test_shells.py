@@ -223,7 +223,7 @@ def test_an_inside_out_file_is_aligned_by_its_outward_normals(poses):
 
 
 def test_a_given_orientation_score_decides_the_side(poses):
-    from meshcorr.core.orientation import orientation_score
+    from meshcorr.core.map_orientation import orientation_score
 
     rest, bent = poses
     zoomed, _ = refine_map(rest, bent, np.arange(rest.n_vertices), k=30)

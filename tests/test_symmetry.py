@@ -16,7 +16,8 @@ import meshcorr
 from meshcorr import datasets as ds
 from meshcorr.errors import MeshWarning, ParameterError
 from meshcorr.core.mesh import Mesh
-from meshcorr.choice.orientation import orient_outward, orientation_score, vertex_normals
+from meshcorr.core.orientation import orient_outward, vertex_normals
+from meshcorr.core.map_orientation import orientation_score
 from meshcorr.stages.reorder import Configuration
 from meshcorr.choice.symmetry import ConfigurationCandidate as Candidate, candidate_ranks, choose, metric_distortion, right_map_missing
 

@@ -12,7 +12,7 @@ from meshcorr.cli import main  # noqa: E402
 from meshcorr.errors import ParameterError  # noqa: E402
 from meshcorr.io import write_map, write_mesh  # noqa: E402
 from meshcorr.transfer import check_map, pull_back, read_attribute  # noqa: E402
-from meshcorr.viz.colors import part_colors, scalar_colors  # noqa: E402
+from meshcorr.maps.colors import part_colors, scalar_colors  # noqa: E402
 
 
 def _read_png(path) -> np.ndarray:

@@ -4,11 +4,14 @@ meshcorr kept its 58 modules side by side (``meshcorr.refine``,
 ``meshcorr.landmark_map``, ...); they now live in subpackages by layer
 (``docs/architecture.md``). ``import meshcorr.refine`` and
 ``from meshcorr.refine import zoomout`` still work: a finder on
-``sys.meta_path`` answers the old name with the module at its new place
-(the same module object, so patching either name patches both) and emits
-a :class:`DeprecationWarning` naming the new path. The public modules that
-``meshcorr`` itself lists (``meshcorr.datasets``, ``meshcorr.fmap``, ...)
-keep their short names without a warning.
+``sys.meta_path`` answers the old name with the module at its new place (the
+same module object, so patching either name patches both) and emits a
+:class:`DeprecationWarning` naming the new path. A name that moved on to
+another module (:data:`MOVED_NAMES`, e.g. ``meshcorr.refine.laplace_basis``,
+now in :mod:`meshcorr.spectral.basis`) is answered from there with a
+warning that names its new home. The public modules that ``meshcorr`` itself lists
+(``meshcorr.datasets``, ``meshcorr.fmap``, ...) keep their short names
+without a warning.
 """
 
 from __future__ import annotations
@@ -40,6 +43,30 @@ MOVED: dict[str, str] = {
     "result": "maps.result", "texture": "maps.texture",
     "benchmark": "evaluation.benchmark", "ground_truth": "evaluation.ground_truth", "cuts": "evaluation.cuts",
     "consistency": "collection.consistency", "plots": "viz.plots",
+    # modules that moved between subpackages
+    "viz.colors": "maps.colors",
+}
+
+#: Names that left their flat-layout module: old module -> {name: "new.module:new_name"}.
+MOVED_NAMES: dict[str, dict[str, str]] = {
+    "refine": {**{name: f"spectral.basis:{name}" for name in ("laplace_basis", "pair_bases", "orthogonal_fit",
+                                                              "BasisPrefetch", "prefetch_bases")},
+               **{name: f"spectral.nearest:{name}" for name in ("nearest_vertices", "PRUNE_ABOVE",
+                                                                "SCREEN_ABOVE")}},
+    "orientation": {name: f"core.map_orientation:{name}" for name in ("orientation_score", "orientation_scores",
+                                                                     "regional_orientation",
+                                                                     "consistent_vertices")},
+    "prepared": {"prepare": "pipeline.prepare:prepare", "SHAPE_SETTINGS": "pipeline.settings:SHAPE_SETTINGS",
+                 "shape_settings": "pipeline.settings:shape_settings", "REFINE_K": "pipeline.settings:REFINE_K"},
+    "pipeline": {"embedding_spread": "stages.anchors:embedding_spread",
+                 "ANCHOR_SCALES": "stages.anchors:ANCHOR_SCALES"},
+    "partial": {name: f"stages.part_checks:{name}" for name in (
+        "PARTIAL_MODES", "check_partial_options", "partiality_suspicion", "part_evidence", "geodesic_rows",
+        "geodesic_diameter", "check_part_not_larger", "check_roles")},
+    "symmetry": {"Candidate": "choice.symmetry:ConfigurationCandidate"},
+    "ground_truth": {"read_index_lines": "io.indices:read_index_lines", "index_fields": "io.indices:index_fields"},
+    "collection": {"read_pairs": "collection.pairs:read_pair_list", "connect": "collection.cluster:connect",
+                   "FIELDS": "collection.summary:FIELDS"},
 }
 
 #: Public modules of ``meshcorr`` (its ``__all__``) -> their place; these short names stay, silently.
@@ -52,17 +79,39 @@ PUBLIC_MODULES: dict[str, str] = {
 def new_name(old: str) -> str | None:
     """``meshcorr.<new place>`` of a flat-layout module name ``meshcorr.<old>``, else None."""
     parts = old.split(".")
-    if len(parts) != 2 or parts[0] != "meshcorr":
+    if len(parts) < 2 or parts[0] != "meshcorr":
         return None
-    short = parts[1]
+    short = ".".join(parts[1:])
     place = MOVED.get(short) or (PUBLIC_MODULES.get(short) if PUBLIC_MODULES.get(short) != short else None)
     return None if place is None else f"meshcorr.{place}"
 
 
 def _warn(old: str, new: str) -> None:
-    if old.split(".")[1] not in PUBLIC_MODULES:
+    if old.partition(".")[2] not in PUBLIC_MODULES:
         warnings.warn(f"{old} moved to {new}; import {new} instead (the old path will be removed).",
                       DeprecationWarning, stacklevel=3)
+
+
+def moved_name(old_module: str, name: str):
+    """The value of a name that left flat-layout module ``old_module`` (with the warning), else AttributeError."""
+    place = MOVED_NAMES.get(old_module, {}).get(name)
+    if place is None:
+        raise AttributeError(name)
+    module, _, attribute = place.partition(":")
+    warnings.warn(f"meshcorr.{old_module}.{name} moved to meshcorr.{module}.{attribute}; import it from there "
+                  "(the old path will be removed).", DeprecationWarning, stacklevel=3)
+    return getattr(importlib.import_module(f"meshcorr.{module}"), attribute)
+
+
+def _getattr_of_moved_names(old_module: str, new_module: str):
+    """A module ``__getattr__`` answering the names that left ``old_module`` (:data:`MOVED_NAMES`)."""
+    def __getattr__(name: str):
+        try:
+            return moved_name(old_module, name)
+        except AttributeError:
+            raise AttributeError(f"module {new_module!r} has no attribute {name!r}") from None
+
+    return __getattr__
 
 
 class _Alias(importlib.abc.Loader):
@@ -74,6 +123,10 @@ class _Alias(importlib.abc.Loader):
     def create_module(self, spec):
         _warn(spec.name, self.new)
         module = importlib.import_module(self.new)
+        old = spec.name.partition(".")[2]
+        if old in MOVED_NAMES and "__getattr__" not in vars(module):
+            # ``from meshcorr.refine import laplace_basis``: the name is looked up at its new home
+            module.__getattr__ = _getattr_of_moved_names(old, module.__name__)
         self.spec = module.__spec__  # the import system sets the alias's spec on the module; put it back
         return module
 
@@ -119,6 +172,9 @@ def forwarding(package: str, module: str):
             return getattr(target, name)
         if importlib.util.find_spec(f"{package}.{name}") is not None:  # a submodule not imported yet
             return importlib.import_module(f"{package}.{name}")
-        raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        try:  # a name of the flat-layout module that went elsewhere
+            return moved_name(package.partition(".")[2], name)
+        except AttributeError:
+            raise AttributeError(f"module {package!r} has no attribute {name!r}") from None
 
     return __getattr__

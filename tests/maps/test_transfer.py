@@ -5,7 +5,7 @@ import pytest
 
 from meshcorr.errors import ParameterError
 from meshcorr.maps.transfer import check_map, pull_back, transfer_attribute, write_values
-from meshcorr.viz.colors import UNMAPPED_COLOR
+from meshcorr.maps.colors import UNMAPPED_COLOR
 
 
 def test_check_map_accepts_unmapped_and_returns_int64():

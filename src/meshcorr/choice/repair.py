@@ -4,13 +4,13 @@ A map can be right on most of a shape and mirrored on a part of it: the
 legs of a person or the hind legs of a dog swapped left for right under a
 right upper body. Its whole-surface orientation score stays high (the part
 is small), but the worst of its regions reverses the orientation
-(:func:`meshcorr.core.orientation.regional_orientation`). ZoomOut does not undo
+(:func:`meshcorr.core.map_orientation.regional_orientation`). ZoomOut does not undo
 such a swap: at every scale the swapped part pulls the functional map its
 own way.
 
 This module starts again from the consistent part only. The sampled source
 vertices whose mapped neighbourhood keeps the orientation, in regions that
-keep it on the whole (:func:`meshcorr.core.orientation.consistent_vertices`),
+keep it on the whole (:func:`meshcorr.core.map_orientation.consistent_vertices`),
 give the orthogonal functional map :math:`C` of the first
 :data:`REPAIR_K` Laplace-Beltrami functions,
 :math:`\\Phi_1[S] C \\approx \\Phi_2[T(S)]` (the swapped part left out); a
@@ -33,7 +33,7 @@ import numpy as np
 
 from ..runtime.threads import parallel_map
 from ..core.mesh import Mesh
-from ..core.orientation import consistent_vertices
+from ..core.map_orientation import consistent_vertices
 from ..runtime.checks import check_vertex_map
 from ..spectral.basis import basis_size, orthogonal_fit, pair_bases
 from ..spectral.nearest import nearest_vertices

@@ -9,7 +9,7 @@ stage puts the spectral map next to maps started from matched extremities
 (:mod:`meshcorr.stages.landmarks`), each refined the same way, and keeps the
 one that the following energies prefer:
 
-- **orientation** (:func:`meshcorr.choice.orientation.orientation_score`): the
+- **orientation** (:func:`meshcorr.core.map_orientation.orientation_score`): the
   area fraction on which the map keeps the orientation. A left/right mirror
   reverses it everywhere; maps below :data:`ORIENTATION_MIN` are set aside
   whenever one above exists and the orientation can be trusted.
@@ -42,7 +42,7 @@ one that the following energies prefer:
   map showed it (TOSCA michael16 -> michael8: 0.83 and 0.93 for the right
   map, 0.61 and 0.95 for the turned one). Without the shells (ZoomOut's maps
   alone) the scores are too noisy for this factor, and it is left out.
-- **regional orientation** (:func:`meshcorr.choice.orientation.regional_orientation`):
+- **regional orientation** (:func:`meshcorr.core.map_orientation.regional_orientation`):
   the orientation score of the worst of 12 regions; reported, so that a
   partly mirrored result can be seen in ``--json``; a map whose worst region
   is below :data:`meshcorr.choice.repair.REPAIR_BELOW` gets a repaired candidate
@@ -68,7 +68,7 @@ import numpy as np
 
 from ..runtime.threads import parallel_map
 from .curvature import curvature_disagreement
-from .orientation import orientation_scores
+from ..core.map_orientation import orientation_scores
 from ..stages.shells import shell_refine
 from .symmetry import metric_distortion, rounded
 
@@ -185,7 +185,7 @@ def score_orientation(candidate: MapCandidate, source, target, *, random_state: 
     ----------
     candidate : MapCandidate
     source, target : Mesh
-        Both with a reliable outside (:func:`meshcorr.choice.orientation.mesh_orientation`).
+        Both with a reliable outside (:func:`meshcorr.core.orientation.mesh_orientation`).
     random_state : int or None
         Seed of the samples.
     """

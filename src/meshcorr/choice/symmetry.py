@@ -8,7 +8,7 @@ confuses the front and the back of thin shapes (a person's chest and
 back), which is not an isometry. Two measures on each candidate's map tell
 these apart:
 
-- the **orientation score** (:func:`meshcorr.choice.orientation.orientation_score`):
+- the **orientation score** (:func:`meshcorr.core.map_orientation.orientation_score`):
   near 1 for an orientation-preserving map, near 0 for a mirrored one. The
   left/right mirror reverses orientation; it is invisible to every intrinsic
   measure.
@@ -29,7 +29,7 @@ these apart:
   mesh's largest one: 0 for an isometry (the Gromov-Hausdorff-type
   criterion of isometric matching; Bronstein, Bronstein & Kimmel, PNAS
   2006). Signed curvature needs an outward normal: when a mesh's outside is
-  undefined (:mod:`meshcorr.choice.orientation`), both orientation and curvature
+  undefined (:mod:`meshcorr.core.orientation`), both orientation and curvature
   are set aside and the distortion decides.
 
 :func:`choose` takes the orientation-preserving candidate whose curvature
@@ -210,7 +210,7 @@ def choose(candidates: list[ConfigurationCandidate], symmetry: str = "auto", *,
         alternative ``"auto"`` would keep.
     orientation_reliable : bool
         False when a mesh's outside is undefined (see
-        :mod:`meshcorr.choice.orientation`): orientation scores and the signed
+        :mod:`meshcorr.core.orientation`): orientation scores and the signed
         curvature are then ignored, and each candidate's ``distortion``
         must be measured.
 

@@ -18,7 +18,7 @@ from ..spectral.modes import MODES
 from ..pipeline.settings import Settings
 from ..stages.reorder import REORDER_MODES
 from ._mapfile import print_map
-from ..runtime.progress import StderrProgress as StageProgress
+from ..runtime.progress import StderrProgress
 
 HELP = "compute the vertex map from SOURCE to TARGET"
 
@@ -187,11 +187,11 @@ def check_output_path(path: str, what: str = "the output") -> None:
     check_outputs({what: path})
 
 
-def progress_for(args, label: str) -> StageProgress | None:
+def progress_for(args, label: str) -> StderrProgress | None:
     """The progress callback of ``-q`` / default / ``-v``: lines on stderr naming ``label``."""
     if args.quiet:
         return None
-    return StageProgress(sys.stderr, label=label, delay=0.0 if args.verbose else 1.0)
+    return StderrProgress(sys.stderr, label=label, delay=0.0 if args.verbose else 1.0)
 
 
 def run(args) -> int:

@@ -201,14 +201,14 @@ def shape_dna(mesh: Mesh, k: int = 40, *, random_state: int | None = 0) -> np.nd
     mesh : Mesh
         A triangle mesh or a point cloud (its robust Laplacian).
     k : int
-        Eigenvalues computed (:func:`meshcorr.stages.refine.laplace_basis`, cached
+        Eigenvalues computed (:func:`meshcorr.spectral.basis.laplace_basis`, cached
         on the mesh: the refinement's basis when ``k`` is its size). They are
         those of the shape scaled to unit area, :math:`\\lambda_i A`, so the
         Shape-DNA does not change with a uniform scale.
     random_state : int or None
         Seed of the eigensolver's start vector.
     """
-    from ..stages.refine import laplace_basis
+    from ..spectral.basis import laplace_basis
 
     return _positive(laplace_basis(mesh, k, random_state=random_state)[0])
 

@@ -109,7 +109,7 @@ class Correspondence:
         refined.
     orientation_reliable : bool or None
         Whether both meshes have a well-defined outside, so orientation
-        scores mean something (see :mod:`meshcorr.choice.orientation`).
+        scores mean something (see :mod:`meshcorr.core.orientation`).
     refine_history : list of dict
         Per ZoomOut iteration (:mod:`meshcorr.stages.refine`): basis size, fraction changed.
     map_candidates : list of dict

@@ -63,7 +63,7 @@ def read_attribute(spec: str, target_path, vertices, faces) -> np.ndarray:
     ----------
     spec : str
         ``"colors"`` (the target file's own vertex colours), ``"parts"`` or
-        ``"xyz"`` (see :func:`meshcorr.viz.colors.mesh_coloring`), or a
+        ``"xyz"`` (see :func:`meshcorr.maps.colors.mesh_coloring`), or a
         ``.npy``/text file with one row per target vertex.
     target_path : str or path-like
         The target mesh file (read again for its colours).
@@ -85,7 +85,7 @@ def read_attribute(spec: str, target_path, vertices, faces) -> np.ndarray:
     """
     n = len(vertices)
     if spec in ("parts", "xyz"):
-        from ..viz.colors import mesh_coloring
+        from .colors import mesh_coloring
 
         return mesh_coloring(spec, vertices, faces)
     if spec == "colors":
@@ -144,7 +144,7 @@ def transfer_attribute(values, mapping, *, cmap: str = "viridis") -> tuple[np.nd
     mapping : (n_source,) int
         Checked map (see :func:`check_map`).
     cmap : str
-        Colour map of a scalar field (see :func:`meshcorr.viz.colors.scalar_colors`),
+        Colour map of a scalar field (see :func:`meshcorr.maps.colors.scalar_colors`),
         spanning the target field's range so that both meshes share one scale.
 
     Returns
@@ -154,7 +154,7 @@ def transfer_attribute(values, mapping, *, cmap: str = "viridis") -> tuple[np.nd
     pulled : (n_source,) float or (n_source, 3) uint8
         The pulled-back values (NaN / grey where unmapped).
     """
-    from ..viz.colors import UNMAPPED_COLOR, scalar_colors
+    from .colors import UNMAPPED_COLOR, scalar_colors
 
     values = np.asarray(values)
     if values.ndim == 2:

@@ -36,7 +36,7 @@ that:
    the few tips do.
 4. **The choice** (:mod:`meshcorr.choice.selection`): orientation (a part of a
    closed shape has a well-defined outside once its boundary loops are
-   capped, :mod:`meshcorr.choice.orientation`), curvature disagreement and the
+   capped, :mod:`meshcorr.core.orientation`), curvature disagreement and the
    metric distortion of :func:`fitted_distortion`, which fits the unknown
    scale and leaves out the vertices near the cut.
 5. **Partial ZoomOut** (:func:`partial_zoomout`): the chosen map is refined
@@ -81,8 +81,9 @@ from ..errors import PartialityError
 from ..choice.extremities import MAX_EXTREMITIES, Extremities, find_extremities
 from ..core.sampling import farthest_point_sampling
 from ..core.mesh import Mesh
-from ..choice.orientation import mesh_orientation, vertex_normals
-from ..stages.refine import _nearest_rows, laplace_basis
+from ..core.orientation import mesh_orientation, vertex_normals
+from ..spectral.basis import laplace_basis
+from ..spectral.nearest import nearest_rows
 from ..choice.selection import LANDMARK_RADIUS, MapCandidate, candidate_summaries, choose_map, score_orientation
 from ..stages.shells import shell_refine
 from ..runtime.timing import StageTimer
@@ -488,11 +489,11 @@ def partial_zoomout(part_basis: np.ndarray, whole_basis: np.ndarray, mapping: np
         A, B = part_basis[s1, :k], whole_basis[images, :kw]
         U, S, Vt = np.linalg.svd((A * w[:, None]).T @ (B * w[:, None]), full_matrices=False)
         projection = (U @ Vt).T  # (kw, k): C^T / sigma
-        new = s2[_nearest_rows(A, whole_basis[s2, :kw] @ projection)]
+        new = s2[nearest_rows(A, whole_basis[s2, :kw] @ projection)]
         history.append({"k": int(k), "k_whole": int(kw), "changed": float(np.mean(new != images))})
         images = new
     kw = projection.shape[0]
-    return pool[_nearest_rows(part_basis, whole_basis[pool, :kw] @ projection)], history
+    return pool[nearest_rows(part_basis, whole_basis[pool, :kw] @ projection)], history
 
 
 def _orientation_reliable(*meshes: Mesh) -> bool:

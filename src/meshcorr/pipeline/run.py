@@ -31,7 +31,8 @@ from typing import NamedTuple
 import numpy as np
 
 from ..choice.curvature import curvature_disagreement
-from ..choice.orientation import mesh_orientation, orientation_score
+from ..core.orientation import mesh_orientation
+from ..core.map_orientation import orientation_score
 from ..choice.symmetry import (WIDE_CANDIDATES, ConfigurationCandidate, candidate_ranks, choose, metric_distortion,
                                right_map_missing)
 from ..choice.whole_map import EXTREMITY_STARTS, WholeMapChoice, whole_map_choice
@@ -49,7 +50,8 @@ from ..stages.anchors import (EXACT_PAIRS, anchor_descriptors, embedding_neighbo
 from ..stages.bijection import check_fixed_pairs, nearest_bijection
 from ..stages.icp import tps_icp
 from ..stages.landmarks import check_landmarks, landmark_descriptors
-from ..stages.refine import prefetch_bases, refine_map
+from ..spectral.basis import prefetch_bases
+from ..stages.refine import refine_map
 from ..stages.reorder import Configuration, rank_configurations
 from ..stages.shells import shell_refine
 from .methods import applicable_options, run_method
@@ -186,7 +188,7 @@ def _spectral_maps(shapes, settings: Settings, mode: str, timer: StageTimer) -> 
     src, tgt = as_meshes(*shapes)
     seed, per_shape = settings.random_state, shape_settings(settings)
     # The refinement's Laplace-Beltrami bases depend on the meshes only: a worker
-    # thread computes them while steps 1-7 run (meshcorr.stages.refine.prefetch_bases).
+    # thread computes them while steps 1-7 run (meshcorr.spectral.basis.prefetch_bases).
     with prefetch_bases(src, tgt, settings.refine_k, random_state=seed, enabled=settings.refine) as bases:
         # Steps 1-3: geodesic distances, Gaussian affinities, scaled spectral embedding.
         spectra = [pair_spectrum(shape, per_shape, mode, timer) for shape in shapes]

@@ -11,7 +11,7 @@ process-wide, and for OpenBLAS's pthreads layer threadpoolctl lets only one
 thread change it (the first that does, while it lives); limits set in other
 threads are ignored. A stage that runs BLAS in several Python threads must
 therefore hold the limit in the calling thread around all of them, as
-:func:`parallel_map` and :func:`meshcorr.stages.refine.prefetch_bases` do: limits
+:func:`parallel_map` and :func:`meshcorr.spectral.basis.prefetch_bases` do: limits
 set only inside worker threads were measured to leave BLAS either unlimited
 in them or at one thread for the rest of the process.
 

@@ -3,7 +3,7 @@
 Most of the time of a pair goes into work that depends on one mesh only:
 its geodesic rows and spectral embedding (docs/method.md, steps 1-3), the
 outward orientation and the curvature field that score candidate maps
-(:mod:`meshcorr.choice.orientation`, :mod:`meshcorr.choice.curvature`), and the
+(:mod:`meshcorr.core.orientation`, :mod:`meshcorr.choice.curvature`), and the
 Laplace-Beltrami basis of the refinement (:mod:`meshcorr.stages.refine`).
 :func:`meshcorr.prepare` (:mod:`meshcorr.pipeline.prepare`) computes all of it with the very
 functions :func:`meshcorr.match` calls, for the settings that affect it
@@ -56,7 +56,7 @@ from ..errors import PreparedShapeError
 from ..core.holes import fill_holes
 from ..core.mesh import Mesh, MeshLike, as_mesh
 from ..spectral.modes import build_spectrum
-from ..choice.orientation import Orientation
+from ..core.orientation import Orientation
 from ..spectral.spectrum import Spectrum, dense_rows
 from ..runtime.timing import StageTimer
 
@@ -282,9 +282,9 @@ def warm(mesh: Mesh, spectrum: Spectrum, settings: dict) -> None:
     """
     from ..choice.curvature import curvature_disagreement
     from ..choice.extremities import spectrum_extremities
-    from ..choice.orientation import orientation_scores
+    from ..core.map_orientation import orientation_scores
     from ..stages.anchors import embedding_spread
-    from ..stages.refine import laplace_basis
+    from ..spectral.basis import laplace_basis
     from ..choice.selection import distortion_sources
 
     seed = settings["random_state"]

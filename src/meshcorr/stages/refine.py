@@ -60,12 +60,10 @@ from scipy.optimize import linear_sum_assignment
 from ..runtime.checks import MapMessages, check_int, check_vertex_map
 from ..errors import ParameterError
 from ..core.mesh import Mesh
-from ..spectral.basis import basis_size, laplace_basis, orthogonal_fit, pair_bases, prefetch_bases
-from ..spectral.nearest import PRUNE_ABOVE, nearest_rows, nearest_vertices
+from ..spectral.basis import basis_size, orthogonal_fit, pair_bases
+from ..spectral.nearest import nearest_rows, nearest_vertices
 
-__all__ = ["LANDMARK_WEIGHT", "REFINED_MAP", "refine_map", "zoomout",
-           # the shared kernels, at home in meshcorr.spectral.basis and meshcorr.spectral.nearest
-           "PRUNE_ABOVE", "laplace_basis", "nearest_vertices", "orthogonal_fit", "pair_bases", "prefetch_bases"]
+__all__ = ["LANDMARK_WEIGHT", "REFINED_MAP", "refine_map", "zoomout"]
 
 #: Sampled pairs each known landmark pair counts as in every ZoomOut fit (see :func:`zoomout`).
 LANDMARK_WEIGHT = 20
@@ -78,9 +76,6 @@ REFINED_MAP = MapMessages(
     out_of_range="The map to refine must hold one target vertex in [0, {n_target}) per source vertex ({n_source}). "
                  "Got shape {shape}.",
     unmapped=False)
-#: The nearest-row search under its name before issue 30, for :mod:`meshcorr.pipeline.partial` until its
-#: import names :func:`meshcorr.spectral.nearest.nearest_rows`.
-_nearest_rows = nearest_rows
 
 
 def zoomout(source_basis: np.ndarray, target_basis: np.ndarray, mapping: np.ndarray, *,

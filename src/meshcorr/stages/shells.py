@@ -23,7 +23,7 @@ For :math:`k = k_0 < \\dots < K`, given the current map :math:`T`:
 - **rigid motion**: the orthogonal motion and translation that best move the
   source shell onto the target shell's images (Kabsch, weighted by vertex
   area): the shapes may come in any position. It is a rotation when the
-  given map keeps the orientation (:func:`meshcorr.core.orientation.orientation_score`
+  given map keeps the orientation (:func:`meshcorr.core.map_orientation.orientation_score`
   >= 0.5, decided once for the whole map) and a reflection when it mirrors
   it (the deformed normals are then turned): the stage refines the map it is
   given, it does not choose between mirror images;
@@ -80,7 +80,8 @@ from ..runtime.threads import parallel_map
 from ..errors import ParameterError
 from ..core.laplacian import vertex_areas
 from ..core.mesh import Mesh
-from ..core.orientation import mesh_orientation, orientation_score, vertex_normals
+from ..core.orientation import mesh_orientation, vertex_normals
+from ..core.map_orientation import orientation_score
 from ..runtime.checks import check_vertex_map
 from ..spectral.basis import basis_size, laplace_basis, orthogonal_fit, pair_bases
 from ..spectral.nearest import nearest_vertices
@@ -132,7 +133,7 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40
     landmarks : (L, 2) int, optional
         Known (source, target) vertex pairs, held in the map at every step.
     orientation : float, optional
-        The given map's :func:`~meshcorr.core.orientation.orientation_score` with
+        The given map's :func:`~meshcorr.core.map_orientation.orientation_score` with
         the same ``random_state``, when the caller has it (it decides between
         a rotation and a reflection); measured here when None.
     descriptors : ((n1, d), (n2, d)) float, optional

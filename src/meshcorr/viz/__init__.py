@@ -1,6 +1,6 @@
 """Pictures of meshes and correspondences.
 
-- :mod:`meshcorr.viz.colors` -- per-vertex colourings (parts, coordinates,
+- :mod:`meshcorr.maps.colors` -- per-vertex colourings (parts, coordinates,
   colour maps); numpy only.
 - :mod:`meshcorr.viz.render` -- headless static pictures (PNG) with
   matplotlib's Agg back end (``pip install meshcorr[plot]``).

@@ -21,7 +21,7 @@ from ..evaluation.metrics import GeodesicCache, geodesic_errors
 from ..core.mesh import as_mesh
 from ..runtime.progress import as_progress
 from ..maps.transfer import check_map, pull_back
-from .colors import UNMAPPED_COLOR, mesh_coloring, scalar_colors
+from ..maps.colors import UNMAPPED_COLOR, mesh_coloring, scalar_colors
 from .render import Panel, render_panels
 
 __all__ = ["correspondence_errors", "correspondence_figure", "spectrum_figure"]
@@ -113,7 +113,7 @@ def correspondence_figure(source, target, mapping, path, *, truth=None, error: b
     error : bool
         Colour the source by geodesic error instead of by transfer.
     coloring : {"parts", "xyz"}
-        Colouring of the target (see :func:`meshcorr.viz.colors.mesh_coloring`).
+        Colouring of the target (see :func:`meshcorr.maps.colors.mesh_coloring`).
     geodesic : str
         Geodesic solver for the errors.
     elev, azim, up, dpi

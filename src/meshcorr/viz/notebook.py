@@ -51,7 +51,7 @@ def show(source: MeshLike, target: MeshLike, mapping, *, coloring: str = "parts"
         Target vertex of each source vertex (-1 = unmapped, drawn grey), in
         the numbering of these meshes.
     coloring : {"parts", "xyz"}
-        The target's colouring (:func:`meshcorr.viz.colors.mesh_coloring`).
+        The target's colouring (:func:`meshcorr.maps.colors.mesh_coloring`).
     colors : (n_target, 3) uint8, optional
         Target colours to use instead.
     height : int
@@ -70,7 +70,7 @@ def show(source: MeshLike, target: MeshLike, mapping, *, coloring: str = "parts"
         Without plotly, or a map that does not fit the meshes.
     """
     from ..maps.transfer import check_map, pull_back
-    from .colors import UNMAPPED_COLOR, mesh_coloring
+    from ..maps.colors import UNMAPPED_COLOR, mesh_coloring
 
     go = require_plotly()
     src = source if isinstance(source, Mesh) else as_mesh(source, name="source")

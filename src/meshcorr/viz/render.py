@@ -25,7 +25,7 @@ import numpy as np
 from ..runtime.checks import check_choice, check_float
 from ..errors import ParameterError
 from ..io import atomic_write
-from .colors import COLORMAPS
+from ..maps.colors import COLORMAPS
 
 __all__ = ["Panel", "camera_frame", "render_panels"]
 

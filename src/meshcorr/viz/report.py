@@ -32,7 +32,7 @@ import numpy as np
 from ..runtime.checks import check_int
 from ..io import atomic_write
 from ..maps.transfer import check_map, pull_back
-from .colors import UNMAPPED_COLOR, mesh_coloring
+from ..maps.colors import UNMAPPED_COLOR, mesh_coloring
 from .render import camera_frame
 
 __all__ = ["report_html", "write_report"]

@@ -1,11 +1,11 @@
-"""meshcorr.viz.colors: colour maps, coordinate colours and part colours with known values."""
+"""meshcorr.maps.colors: colour maps, coordinate colours and part colours with known values."""
 
 import numpy as np
 import pytest
 
 import meshcorr.datasets as datasets
 from meshcorr.errors import ParameterError
-from meshcorr.viz.colors import (COLORMAPS, PALETTE, UNMAPPED_COLOR, coordinate_colors, mesh_coloring,
+from meshcorr.maps.colors import (COLORMAPS, PALETTE, UNMAPPED_COLOR, coordinate_colors, mesh_coloring,
                                  part_colors, scalar_colors)
 
 

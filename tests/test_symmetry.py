@@ -330,7 +330,7 @@ def test_candidates_are_widened_when_the_right_map_is_missing(pair, monkeypatch,
     # Score a single near-tied configuration: rank 0 or 1, one of which is the mirror
     # image. With the mirror alone no candidate preserves orientation, so the pipeline
     # must widen the set and still find the right side.
-    import meshcorr.pipeline.run as pipeline
+    import meshcorr.choice.symmetry as pipeline
 
     src, tgt, truth, mirror = pair
     monkeypatch.setattr(pipeline, "candidate_ranks", lambda configurations: [only])

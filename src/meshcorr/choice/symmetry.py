@@ -46,14 +46,21 @@ from typing import Callable
 
 import numpy as np
 
+from ..core.map_orientation import orientation_score
 from ..runtime.checks import check_choice, check_float, check_int
+from ..runtime.threads import parallel_map
+from ..stages.icp import tps_icp
 from ..stages.reorder import Configuration
+from .curvature import curvature_disagreement
 
 SYMMETRY_MODES = ("auto", "cost", "mirror")
 #: See :func:`right_map_missing`.
 WIDEN_RATIO = 1.15
 #: Configurations scored when the near-tied set is widened.
 WIDE_CANDIDATES = 6
+#: Geodesic rows sampled on the source for the metric distortion of a candidate
+#: (measured only when the orientation is unreliable).
+N_DISTORTION_SOURCES = 16
 
 
 @dataclass
@@ -248,3 +255,66 @@ def choose(candidates: list[ConfigurationCandidate], symmetry: str = "auto", *,
     if symmetry == "mirror" and other is not None:
         return other, chosen
     return chosen, other
+
+
+def score_configurations(source, target, spectra, configurations: list[Configuration], *, icp_iterations: int,
+                         n_control: int, anneal: float, reliable: bool, random_state: int | None,
+                         timer) -> list[ConfigurationCandidate]:
+    """Step 5 for each near-tied configuration, and the scores of its map: the first round of the choice.
+
+    Parameters
+    ----------
+    source, target : Mesh
+    spectra : (Spectrum, Spectrum)
+        The two shapes' spectra (embeddings ``(n, k - 1)`` and geodesic rows).
+    configurations : list of Configuration
+        Ranked by cost (:func:`meshcorr.stages.reorder.rank_configurations`).
+    icp_iterations, n_control, anneal : int, int, float
+        TPS-ICP's settings (:func:`meshcorr.stages.icp.tps_icp`).
+    reliable : bool
+        Both meshes have a reliable outside; else the orientation and
+        curvature are set aside and the metric distortion is measured.
+    random_state : int or None
+    timer : StageTimer
+        Times the stages "icp" and "symmetry".
+
+    Returns
+    -------
+    candidates : list of ConfigurationCandidate
+        One per near-tied configuration (:func:`candidate_ranks`), its
+        TPS-ICP nearest-neighbour map scored by orientation, curvature and
+        (unreliable orientation only) metric distortion. When the near-tied
+        set seems to lack the right map (:func:`right_map_missing`), the
+        cheapest :data:`WIDE_CANDIDATES` configurations are scored too. The
+        anchors and the refinement run later, for the chosen map and its
+        alternative only.
+    """
+    X, Y = spectra[0].embedding, spectra[1].embedding
+    g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
+    rng = np.random.default_rng(random_state)
+    sources = rng.choice(len(X), size=min(N_DISTORTION_SOURCES, len(X)), replace=False)
+    source_rows: dict = {}
+
+    def align(rank: int):
+        return tps_icp(X, configurations[rank].apply(Y), max_iter=icp_iterations, n_control=n_control,
+                       anneal=anneal, random_state=random_state)
+
+    def score(ranks: list[int]) -> list[ConfigurationCandidate]:
+        # The candidates' alignments are independent: one thread per core (meshcorr.runtime.threads).
+        with timer.stage("icp"):
+            icps = parallel_map(align, ranks)
+        with timer.stage("symmetry"):
+            return [ConfigurationCandidate(
+                rank=rank, configuration=configurations[rank],
+                orientation=orientation_score(source, target, icp.matches, random_state=random_state),
+                curvature=curvature_disagreement(source, target, icp.matches, random_state=random_state),
+                distortion=(np.nan if reliable else metric_distortion(g1, g2, icp.matches, sources, source_rows)),
+                mapping=icp.matches, extra={"icp": icp, "anchors": np.zeros((0, 2), dtype=np.int64), "cost": None})
+                for rank, icp in zip(ranks, icps)]
+
+    ranks = candidate_ranks(configurations)
+    candidates = score(ranks)
+    if reliable and right_map_missing(candidates):
+        candidates += score([rank for rank in range(min(WIDE_CANDIDATES, len(configurations)))
+                             if rank not in ranks])
+    return candidates

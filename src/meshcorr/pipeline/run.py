@@ -30,25 +30,19 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..choice.curvature import curvature_disagreement
 from ..core.orientation import mesh_orientation
-from ..core.map_orientation import orientation_score
-from ..choice.symmetry import (WIDE_CANDIDATES, ConfigurationCandidate, candidate_ranks, choose, metric_distortion,
-                               right_map_missing)
+from ..choice.symmetry import ConfigurationCandidate, choose, score_configurations
 from ..choice.whole_map import EXTREMITY_STARTS, WholeMapChoice, whole_map_choice
 from ..core.holes import restrict, unfilled
 from ..core.mesh import Mesh, MeshLike
 from ..errors import MeshWarning, ParameterError, PartialShapeWarning
 from ..maps.result import Correspondence
 from ..runtime.progress import as_progress
-from ..runtime.threads import parallel_map
 from ..runtime.timing import StageProgress, StageTimer
 from ..shapes.prepared import PreparedShape, as_meshes, pair_shapes, pair_spectrum
 from ..spectral.modes import resolve_memory, select_mode
-from ..stages.anchors import (EXACT_PAIRS, anchor_descriptors, embedding_neighbours, embedding_spread,
-                              proximity_matching, select_anchors)
+from ..stages.anchors import embedding_spread, match_with_anchors
 from ..stages.bijection import check_fixed_pairs, nearest_bijection
-from ..stages.icp import tps_icp
 from ..stages.landmarks import check_landmarks, landmark_descriptors
 from ..spectral.basis import prefetch_bases
 from ..stages.refine import refine_map
@@ -61,9 +55,6 @@ from .settings import REFINE_K, Settings, as_settings, shape_settings
 
 __all__ = ["match", "REFINE_K", "EXTREMITY_STARTS"]
 
-#: Geodesic rows sampled on the source for the metric distortion of a candidate
-#: (measured only when the orientation is unreliable).
-N_DISTORTION_SOURCES = 16
 
 
 def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, settings: Settings | None = None, *,
@@ -157,78 +148,114 @@ class _Aligned(NamedTuple):
 
 def _match_whole(shapes, pairs: np.ndarray | None, settings: Settings, max_memory: int | None,
                  timer: StageTimer) -> Correspondence:
-    """Two whole shapes: steps 1-7, the whole-map choice, the refinements and the result."""
+    """Two whole shapes, the paper's steps in order, then the whole-map choice and the refinements."""
     src, tgt = as_meshes(*shapes)
     mode = select_mode(settings.mode, src.n_vertices, tgt.n_vertices, max_memory=max_memory,
                        scalable_above=settings.scalable_above, bijective=settings.bijective)
-    aligned = _spectral_maps(shapes, settings, mode, timer)
+    # The refinement's Laplace-Beltrami bases depend on the meshes only: a worker
+    # thread computes them while steps 1-6 run (meshcorr.spectral.basis.prefetch_bases).
+    with prefetch_bases(src, tgt, settings.refine_k, random_state=settings.random_state,
+                        enabled=settings.refine) as bases:
+        spectra = _spectra(shapes, settings, mode, timer)  # steps 1-3
+        configurations = _configurations(spectra, settings, timer)  # step 4
+        candidates, reliable = _alignment(src, tgt, spectra, configurations, settings, timer)  # step 5
+        chosen, other = _matching(candidates, spectra, settings, reliable, timer)  # step 6
+        if settings.refine:
+            with timer.stage("refine"):
+                bases.wait()
+    history = _refinement(src, tgt, chosen, settings, timer)
+    aligned = _Aligned(spectra, configurations, candidates, chosen, other, reliable, history, bases.seconds)
     shell_stage = settings.refine and settings.shells and not settings.bijective and not (src.is_cloud or
                                                                                           tgt.is_cloud)
     # The landmarks' geodesic distances, a further coordinate of the shells' product space.
     described = None if pairs is None or not shell_stage else tuple(
-        landmark_descriptors(spectrum.geodesics_from, ends) for spectrum, ends in zip(aligned.spectra, pairs.T))
+        landmark_descriptors(spectrum.geodesics_from, ends) for spectrum, ends in zip(spectra, pairs.T))
     choice = _choose_map(src, tgt, aligned, pairs, settings, shell_stage, described, timer)
-    local_map, other_map, spectral_kept = choice.mapping, choice.other, choice.spectral_kept
+    local_map, other_map = _final_maps(src, tgt, choice, pairs, settings, shell_stage, described, timer)
+    spectral_kept = choice.spectral_kept and not shell_stage
+    return _result(src, tgt, aligned, local_map, other_map, choice.summaries, spectral_kept, pairs,
+                   settings, dict(mode=mode, max_memory=max_memory, shells=shell_stage), timer)
+
+
+def _spectra(shapes, settings: Settings, mode: str, timer: StageTimer) -> list:
+    """Steps 1-3: geodesic distances, Gaussian affinities, the scaled spectral embedding of each shape."""
+    per_shape = shape_settings(settings)
+    spectra = [pair_spectrum(shape, per_shape, mode, timer) for shape in shapes]
+    src, tgt = as_meshes(*shapes)
+    suspicion = partiality_suspicion(unfilled(src), unfilled(tgt), spectra[0].max_geodesic, spectra[1].max_geodesic)
+    if suspicion:  # a part given as a whole shape (meshcorr.pipeline.partial)
+        warnings.warn(suspicion, PartialShapeWarning, stacklevel=4)
+    return spectra
+
+
+def _configurations(spectra, settings: Settings, timer: StageTimer) -> list[Configuration]:
+    """Step 4: eigenvector reordering and sign correction, every configuration ranked by cost."""
+    with timer.stage("reorder"):
+        return rank_configurations(spectra[0].embedding, spectra[1].embedding, settings.reorder,
+                                   random_state=settings.random_state)
+
+
+def _alignment(src: Mesh, tgt: Mesh, spectra, configurations: list[Configuration], settings: Settings,
+               timer: StageTimer) -> tuple[list[ConfigurationCandidate], bool]:
+    """Step 5 for each near-tied configuration, scored (:func:`meshcorr.choice.symmetry.score_configurations`)."""
+    with timer.stage("symmetry"):
+        reliable = mesh_orientation(src).reliable and mesh_orientation(tgt).reliable
+    candidates = score_configurations(src, tgt, spectra, configurations, icp_iterations=settings.icp_iterations,
+                                      n_control=settings.n_control, anneal=settings.anneal, reliable=reliable,
+                                      random_state=settings.random_state, timer=timer)
+    if not reliable and settings.symmetry == "auto" and len(candidates) > 1:
+        unsure = src if mesh_orientation(src).reason else tgt
+        why = f"{unsure.name}: {mesh_orientation(unsure).reason}"
+        warnings.warn(f"The left/right orientation cannot be checked: {why}. The map may be the mirror "
+                      "image of the right one; compare it with result.alternative_map.", MeshWarning,
+                      stacklevel=4)
+    return candidates, reliable
+
+
+def _matching(candidates: list[ConfigurationCandidate], spectra, settings: Settings, reliable: bool,
+              timer: StageTimer) -> tuple[ConfigurationCandidate, ConfigurationCandidate | None]:
+    """Step 6: the configuration the ``symmetry`` rule chooses and its alternative, matched with anchors."""
+    chosen, other = choose(candidates, settings.symmetry, orientation_reliable=reliable)
+    with timer.stage("matching"):
+        use_spread = settings.anchor_scale == "embedding" and settings.n_anchors > 0
+        spread = embedding_spread(spectra[0]) if use_spread else 1.0
+        for candidate in (chosen, other):
+            if candidate is not None:
+                mapping, cost, anchors = match_with_anchors(
+                    spectra[0].embedding, candidate.extra["icp"].warped, spectra[0].geodesics_from,
+                    spectra[1].geodesics_from, spread, n_anchors=settings.n_anchors,
+                    anchor_weight=settings.anchor_weight, anchor_scale=settings.anchor_scale,
+                    bijective=settings.bijective)
+                candidate.mapping = mapping
+                candidate.extra.update(anchors=anchors, cost=cost)
+    return chosen, other
+
+
+def _refinement(src: Mesh, tgt: Mesh, chosen: ConfigurationCandidate, settings: Settings,
+                timer: StageTimer) -> list:
+    """ZoomOut refinement of the chosen map only (the alternative stays as the matching gave it)."""
+    if not settings.refine:
+        return []
+    with timer.stage("refine"):
+        chosen.mapping, history = refine_map(src, tgt, chosen.mapping, k=settings.refine_k,
+                                             bijective=settings.bijective, random_state=settings.random_state)
+    return history
+
+
+def _final_maps(src: Mesh, tgt: Mesh, choice: WholeMapChoice, pairs: np.ndarray | None, settings: Settings,
+                shell_stage: bool, described, timer: StageTimer) -> tuple[np.ndarray, np.ndarray | None]:
+    """The chosen map through the smooth shells (unless the choice judged it after them) and step 7."""
+    local_map, other_map = choice.mapping, choice.other
     if shell_stage:
         with timer.stage("shells"):  # meshcorr.stages.shells: extrinsic alignment of the chosen map
             if not choice.shelled:
                 local_map = shell_refine(src, tgt, local_map, k=settings.refine_k, landmarks=pairs,
                                          descriptors=described, orientation=choice.orientation,
                                          random_state=settings.random_state)
-        spectral_kept = False
     if settings.bijective:  # an unrefined start of the whole-map choice, or pinned landmarks, are not one-to-one
         local_map = nearest_bijection(local_map, tgt.vertices, fixed=pairs)
         other_map = None if other_map is None else nearest_bijection(other_map, tgt.vertices)
-    return _result(src, tgt, aligned, local_map, other_map, choice.summaries, spectral_kept, pairs,
-                   settings, dict(mode=mode, max_memory=max_memory, shells=shell_stage), timer)
-
-
-def _spectral_maps(shapes, settings: Settings, mode: str, timer: StageTimer) -> _Aligned:
-    """Steps 1-6 and the ZoomOut refinement of the chosen map (its bases computed meanwhile)."""
-    src, tgt = as_meshes(*shapes)
-    seed, per_shape = settings.random_state, shape_settings(settings)
-    # The refinement's Laplace-Beltrami bases depend on the meshes only: a worker
-    # thread computes them while steps 1-7 run (meshcorr.spectral.basis.prefetch_bases).
-    with prefetch_bases(src, tgt, settings.refine_k, random_state=seed, enabled=settings.refine) as bases:
-        # Steps 1-3: geodesic distances, Gaussian affinities, scaled spectral embedding.
-        spectra = [pair_spectrum(shape, per_shape, mode, timer) for shape in shapes]
-        X, Y = spectra[0].embedding, spectra[1].embedding
-        suspicion = partiality_suspicion(unfilled(src), unfilled(tgt), spectra[0].max_geodesic,
-                                         spectra[1].max_geodesic)
-        if suspicion:  # a part given as a whole shape (meshcorr.pipeline.partial)
-            warnings.warn(suspicion, PartialShapeWarning, stacklevel=4)
-        # Step 4: eigenvector reordering and sign correction.
-        with timer.stage("reorder"):
-            configurations = rank_configurations(X, Y, settings.reorder, random_state=seed)
-        # Steps 5-6 for each near-tied configuration; the left/right mirror is
-        # resolved by the orientation of each candidate's map (meshcorr.choice.symmetry).
-        with timer.stage("symmetry"):
-            reliable = mesh_orientation(src).reliable and mesh_orientation(tgt).reliable
-        candidates = _score_configurations(src, tgt, spectra, configurations, settings, timer, reliable=reliable)
-        chosen, other = choose(candidates, settings.symmetry, orientation_reliable=reliable)
-        if not reliable and settings.symmetry == "auto" and len(candidates) > 1:
-            unsure = src if mesh_orientation(src).reason else tgt
-            why = f"{unsure.name}: {mesh_orientation(unsure).reason}"
-            warnings.warn(f"The left/right orientation cannot be checked: {why}. The map may be the mirror "
-                          "image of the right one; compare it with result.alternative_map.", MeshWarning,
-                          stacklevel=4)
-        with timer.stage("matching"):
-            use_spread = settings.anchor_scale == "embedding" and settings.n_anchors > 0
-            spread = embedding_spread(spectra[0]) if use_spread else 1.0
-            for candidate in (chosen, other):
-                if candidate is not None:
-                    _anchor_matching(candidate, X, spectra, spread, n_anchors=settings.n_anchors,
-                                     anchor_weight=settings.anchor_weight, anchor_scale=settings.anchor_scale,
-                                     bijective=settings.bijective)
-        if settings.refine:
-            with timer.stage("refine"):
-                bases.wait()
-    refine_history: list = []
-    if settings.refine:  # the chosen map only: the alternative is kept as proximity matching gave it
-        with timer.stage("refine"):
-            chosen.mapping, refine_history = refine_map(src, tgt, chosen.mapping, k=settings.refine_k,
-                                                        bijective=settings.bijective, random_state=seed)
-    return _Aligned(spectra, configurations, candidates, chosen, other, reliable, refine_history, bases.seconds)
+    return local_map, other_map
 
 
 def _choose_map(src: Mesh, tgt: Mesh, aligned: _Aligned, pairs: np.ndarray | None, settings: Settings,
@@ -371,79 +398,3 @@ def _chosen_first(configurations: list[Configuration], chosen: ConfigurationCand
     """The ranked configurations with the chosen one first and the alternative second."""
     head = [chosen.configuration] + ([other.configuration] if other is not None else [])
     return head + [c for c in configurations if all(c is not h for h in head)]
-
-
-def _score_configurations(src: Mesh, tgt: Mesh, spectra, configurations: list[Configuration], settings: Settings,
-                          timer: StageTimer, *, reliable: bool) -> list[ConfigurationCandidate]:
-    """Align each near-tied configuration and score its map (orientation, curvature).
-
-    The scores use each candidate's TPS-ICP nearest-neighbour map: the
-    anchors and the refinement only run for the chosen map and its
-    alternative (:func:`_anchor_matching`). When the near-tied set seems to lack the
-    right map (:func:`meshcorr.choice.symmetry.right_map_missing`), the cheapest
-    ``WIDE_CANDIDATES`` configurations are scored. The metric distortion (single-source
-    geodesic solves, the costliest score at 100k vertices) is measured only
-    when the orientation is unreliable, the one case where it decides.
-    """
-    X, Y = spectra[0].embedding, spectra[1].embedding
-    g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
-    seed = settings.random_state
-    rng = np.random.default_rng(seed)
-    sources = rng.choice(len(X), size=min(N_DISTORTION_SOURCES, len(X)), replace=False)
-    source_rows: dict = {}
-
-    def score(ranks: list[int]) -> list[ConfigurationCandidate]:
-        # The candidates' alignments are independent: one thread per core (meshcorr.runtime.threads).
-        with timer.stage("icp"):
-            icps = parallel_map(lambda rank: _align(X, configurations[rank].apply(Y), settings), ranks)
-        with timer.stage("symmetry"):
-            return [ConfigurationCandidate(
-                rank=rank, configuration=configurations[rank],
-                orientation=orientation_score(src, tgt, icp.matches, random_state=seed),
-                curvature=curvature_disagreement(src, tgt, icp.matches, random_state=seed),
-                distortion=(np.nan if reliable else
-                            metric_distortion(g1, g2, icp.matches, sources, source_rows)),
-                mapping=icp.matches, extra={"icp": icp, "anchors": np.zeros((0, 2), dtype=np.int64),
-                                            "cost": None}) for rank, icp in zip(ranks, icps)]
-
-    ranks = candidate_ranks(configurations)
-    candidates = score(ranks)
-    if reliable and right_map_missing(candidates):
-        candidates += score([rank for rank in range(min(WIDE_CANDIDATES, len(configurations)))
-                             if rank not in ranks])
-    return candidates
-
-
-def _align(X: np.ndarray, Y_configured: np.ndarray, settings: Settings):
-    """Step 5: thin-plate-spline ICP of one configured target embedding (``icp_iterations``, ``n_control``, ``anneal``)."""
-    return tps_icp(X, Y_configured, max_iter=settings.icp_iterations, n_control=settings.n_control,
-                   anneal=settings.anneal, random_state=settings.random_state)
-
-
-def _anchor_matching(candidate: ConfigurationCandidate, X: np.ndarray, spectra, spread: float, *, n_anchors: int,
-                     anchor_weight: float, anchor_scale: str, bijective: bool) -> None:
-    """Steps 6-7 for one aligned candidate: anchors, proximity-aided matching.
-
-    With ``anchor_scale="embedding"`` the normalised geodesic term is put in
-    the embedding's length scale: multiplied by the mean distance between
-    embedded points over ``h`` times the mean normalised geodesic distance
-    to the anchors (docs/method.md, "Choices where the paper is silent": geodesics in [0, 1] summed over
-    three anchors dwarf embedding distances of ~0.1-0.3). ``spread`` is that mean
-    distance, :func:`meshcorr.stages.tps.mean_pairwise_distance` of ``X``.
-    """
-    warped = candidate.extra["icp"].warped
-    g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
-    # Beyond EXACT_PAIRS both steps search each source point's nearest embedded target points.
-    neighbours = embedding_neighbours(X, warped) if len(X) * len(warped) > EXACT_PAIRS else None
-    anchors = select_anchors(X, warped, g1, g2, n_anchors, neighbours=neighbours)
-    F1 = anchor_descriptors(anchors[:, 0], g1, np.ones(n_anchors))
-    F2 = anchor_descriptors(anchors[:, 1], g2, np.ones(n_anchors))
-    scale = anchor_weight
-    if anchor_scale == "embedding" and n_anchors > 0:
-        mean_geodesic = 0.5 * (F1.mean() + F2.mean())
-        scale *= spread / (n_anchors * max(mean_geodesic, 1e-12))
-    mapping, cost = proximity_matching(X, warped, F1 * scale, F2 * scale, bijective=bijective,
-                                       neighbours=neighbours)
-    candidate.mapping = mapping
-    candidate.extra.update(anchors=anchors, cost=cost)
-

@@ -34,6 +34,8 @@ from ..maps.result import Correspondence
 from ..spectral.spectrum import dense_spectrum
 from ..runtime.timing import StageProgress, StageTimer
 from ._common import finish, load_pair, nearest_map
+from ..core.geodesics import DEFAULT_GEODESIC
+from ..spectral.embedding import N_EIGENPAIRS
 
 
 def _shapiro_brady(method: str, source: MeshLike, target: MeshLike, *, scale: bool, k: int, geodesic: str,
@@ -61,7 +63,7 @@ def _shapiro_brady(method: str, source: MeshLike, target: MeshLike, *, scale: bo
                   configuration=configurations[0], alternatives=configurations)
 
 
-def match_shapiro_brady(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "heat",
+def match_shapiro_brady(source: MeshLike, target: MeshLike, *, k: int = N_EIGENPAIRS, geodesic: str = DEFAULT_GEODESIC,
                         bijective: bool = False, largest_component: bool = False,
                         random_state: int | None = 0, progress: StageProgress | None = None) -> Correspondence:
     """Shapiro & Brady: unscaled eigenvectors, greedy signs, nearest match.
@@ -94,7 +96,7 @@ def match_shapiro_brady(source: MeshLike, target: MeshLike, *, k: int = 6, geode
                           random_state=random_state, progress=progress)
 
 
-def match_shapiro_brady_scaled(source: MeshLike, target: MeshLike, *, k: int = 6, geodesic: str = "heat",
+def match_shapiro_brady_scaled(source: MeshLike, target: MeshLike, *, k: int = N_EIGENPAIRS, geodesic: str = DEFAULT_GEODESIC,
                                bijective: bool = False, largest_component: bool = False,
                                random_state: int | None = 0,
                                progress: StageProgress | None = None) -> Correspondence:

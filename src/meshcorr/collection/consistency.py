@@ -56,6 +56,7 @@ from ..errors import ParameterError
 from ..evaluation.metrics import GeodesicCache
 from ..io import atomic_write, read_map, write_map
 from ..core.mesh import Mesh, as_mesh
+from ..core.geodesics import DEFAULT_GEODESIC
 
 Maps = Mapping[tuple[str, str], np.ndarray]
 
@@ -125,7 +126,7 @@ def sample_triples(names: Sequence[str], maps: Maps, n_triples: int, random_stat
 
 
 def cycle_errors(maps: Maps, meshes: Mapping[str, Mesh], triples: Sequence[tuple[str, str, str]], *,
-                 n_points: int = 200, geodesic: str = "heat", random_state: int | None = 0) -> np.ndarray:
+                 n_points: int = 200, geodesic: str = DEFAULT_GEODESIC, random_state: int | None = 0) -> np.ndarray:
     """:math:`e(A, B, C)` of each triple (module docstring), ``(t,)`` float.
 
     Parameters
@@ -253,7 +254,7 @@ def through_hub(maps: Maps, hub: str) -> dict[tuple[str, str], np.ndarray]:
 
 
 def consistency_report(out_dir, shapes: Sequence[str], records: Sequence[dict], *, n_triples: int = 30,
-                       n_points: int = 200, geodesic: str = "heat", random_state: int | None = 0) -> dict:
+                       n_points: int = 200, geodesic: str = DEFAULT_GEODESIC, random_state: int | None = 0) -> dict:
     """Cycle errors of a batch's maps and of the maps through a hub; writes ``consistent/`` and ``consistency.json``.
 
     Parameters

@@ -45,6 +45,8 @@ from .pointcloud import edges as graph_edges
 from .pointcloud import triangulation_failed
 
 GEODESIC_METHODS = ("heat", "fmm", "exact", "dijkstra")
+#: The default solver (of :class:`meshcorr.Settings` and every function that takes ``geodesic``).
+DEFAULT_GEODESIC = "heat"
 #: The solvers that work on point clouds.
 CLOUD_GEODESIC_METHODS = ("heat", "dijkstra")
 

@@ -19,6 +19,7 @@ from .geodesics import ProgressFn, pairwise_geodesics
 from .pointcloud import validate_cloud
 from .store import ShapeStore
 from .validate import check_vertex_count, select_component, validate_mesh
+from .geodesics import DEFAULT_GEODESIC
 
 
 class Mesh:
@@ -98,7 +99,7 @@ class Mesh:
         v = self.vertices[self.faces]
         return float(0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1).sum())
 
-    def geodesic_matrix(self, method: str = "heat", progress: ProgressFn | None = None) -> np.ndarray:
+    def geodesic_matrix(self, method: str = DEFAULT_GEODESIC, progress: ProgressFn | None = None) -> np.ndarray:
         """All-pairs geodesic distances ``(n, n)``, cached per solver, read-only."""
         key = ("geodesic_matrix", method)
         if key not in self.store:

@@ -37,6 +37,7 @@ from ..core.mesh import Mesh, as_mesh
 from ..pipeline.methods import check_options, run_method
 from ..runtime.messages import ONE_LINE_LENGTH, one_line
 from .run_settings import check_run_settings
+from ..core.geodesics import DEFAULT_GEODESIC
 
 __all__ = ["METHODS", "Dataset", "FIELDS", "dataset_identity", "load_dataset", "read_rows", "run_benchmark",
            "stratified_sample", "summarize", "write_summary"]
@@ -230,7 +231,7 @@ def _row_error(exc: BaseException) -> str:
 
 
 def run_benchmark(dataset_dir, methods: Sequence[str], out_dir, *, n_pairs: int | None = None,
-                  method_options: dict[str, dict] | None = None, geodesic: str = "heat",
+                  method_options: dict[str, dict] | None = None, geodesic: str = DEFAULT_GEODESIC,
                   random_state: int = 0, retry_failed: bool = False,
                   progress: BenchProgress | None = None) -> list[dict]:
     """Map and score every selected pair with every method, resumably.

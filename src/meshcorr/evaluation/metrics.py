@@ -52,6 +52,7 @@ from ..core.geodesics import GEODESIC_METHODS, geodesic_solver
 from .ground_truth import GroundTruth
 from ..core.mesh import Mesh, MeshLike, as_mesh
 from ..runtime.progress import as_progress
+from ..core.geodesics import DEFAULT_GEODESIC
 
 __all__ = ["THRESHOLDS", "TEAR_RATIO", "GeodesicCache", "cumulative_curve", "evaluate_map",
            "feature_point_accuracy", "geodesic_errors", "map_quality", "scalar_summary"]
@@ -95,7 +96,7 @@ class GeodesicCache:
     #: Most single-source solves per call of the solver (and between two progress reports).
     BLOCK = 256
 
-    def __init__(self, method: str = "heat", *, max_meshes: int = 2, progress=None) -> None:
+    def __init__(self, method: str = DEFAULT_GEODESIC, *, max_meshes: int = 2, progress=None) -> None:
         self.method = check_choice("geodesic", method, GEODESIC_METHODS)
         self.max_meshes = check_int("max_meshes", max_meshes, minimum=1)
         self.progress = as_progress(progress)
@@ -224,7 +225,7 @@ def _cache_for(cache: GeodesicCache | None, method: str) -> GeodesicCache:
 
 
 def geodesic_errors(target: MeshLike, predicted: np.ndarray, truth: np.ndarray, *,
-                    method: str = "heat", normalize: bool = True,
+                    method: str = DEFAULT_GEODESIC, normalize: bool = True,
                     cache: GeodesicCache | None = None) -> np.ndarray:
     """Geodesic distance between predicted and true target vertices.
 
@@ -345,7 +346,7 @@ def _stats(errors: np.ndarray, thresholds: Sequence[float]) -> dict:
 
 def evaluate_map(target: MeshLike, mapping: np.ndarray, truth: GroundTruth, *,
                  sym_truth: GroundTruth | None = None, thresholds: Sequence[float] = THRESHOLDS,
-                 geodesic: str = "heat", cache: GeodesicCache | None = None) -> dict:
+                 geodesic: str = DEFAULT_GEODESIC, cache: GeodesicCache | None = None) -> dict:
     """Score a vertex map against ground truth (and optionally its mirror image).
 
     Parameters
@@ -410,7 +411,7 @@ def scalar_summary(report: dict) -> dict:
 
 
 def feature_point_accuracy(target: MeshLike, mapping: np.ndarray, truth: GroundTruth, *,
-                           tolerance: float = 0.05, geodesic: str = "heat",
+                           tolerance: float = 0.05, geodesic: str = DEFAULT_GEODESIC,
                            cache: GeodesicCache | None = None) -> float:
     """Fraction of feature points matched correctly (Jain & Zhang 2006, its Figure 5 measure).
 

@@ -22,6 +22,7 @@ from .._version import __version__
 from ..errors import InputError, ParameterError
 from ..core.mesh import Mesh
 from ..stages.reorder import Configuration
+from ..core.geodesics import DEFAULT_GEODESIC
 
 #: Array attributes written by :meth:`Correspondence.save`.
 _ARRAYS = ("map", "cost", "source_vertices", "target_vertices", "source_embedding", "target_embedding",
@@ -399,7 +400,7 @@ class Correspondence:
 
     # ------------------------------------------------------------------ evaluation and viewing
 
-    def evaluate(self, truth, *, sym_truth=None, geodesic: str = "heat") -> dict:
+    def evaluate(self, truth, *, sym_truth=None, geodesic: str = DEFAULT_GEODESIC) -> dict:
         """Score the map: geodesic error against ground truth, and coverage, bijectivity, continuity.
 
         Parameters

@@ -31,14 +31,17 @@ from typing import Sequence
 import numpy as np
 
 from ..choice.symmetry import SYMMETRY_MODES
-from ..core.geodesics import GEODESIC_METHODS
+from ..core.geodesics import DEFAULT_GEODESIC, GEODESIC_METHODS
 from ..core.holes import fills
 from ..errors import ParameterError
 from ..runtime.checks import check_bool, check_choice, check_float, check_int, check_seed
 from ..runtime.memory import parse_memory
 from ..shapes.prepared import SHAPE_SETTING_NAMES
 from ..spectral.modes import MODES, N_SAMPLES, SCALABLE_ABOVE
-from ..stages.anchors import ANCHOR_SCALES
+from ..spectral.embedding import N_EIGENPAIRS
+from ..stages.anchors import ANCHOR_SCALES, ANCHOR_WEIGHT, N_ANCHORS
+from ..stages.icp import ANNEAL, ICP_ITERATIONS, N_CONTROL
+from ..stages.refine import REFINE_K
 from ..stages.part_checks import check_partial_options
 from ..stages.reorder import REORDER_MODES
 from .methods import METHOD_NAMES, reject_inapplicable
@@ -192,19 +195,19 @@ class Settings:
     method: str = "spectral"
     random_state: int | None = 0
     # the spectral pipeline's stages
-    k: int = 6
-    geodesic: str = "heat"
+    k: int = N_EIGENPAIRS
+    geodesic: str = DEFAULT_GEODESIC
     scale_eigenvalues: bool = True
     reorder: str = "exhaustive"
-    icp_iterations: int = 10
-    n_control: int = 500
-    anneal: float = 0.5
-    n_anchors: int = 3
-    anchor_weight: float = 1.0
+    icp_iterations: int = ICP_ITERATIONS
+    n_control: int = N_CONTROL
+    anneal: float = ANNEAL
+    n_anchors: int = N_ANCHORS
+    anchor_weight: float = ANCHOR_WEIGHT
     anchor_scale: str = "embedding"
     symmetry: str = "auto"
     refine: bool = True
-    refine_k: int = 40
+    refine_k: int = REFINE_K
     shells: bool = True
     landmarks: Sequence[tuple[int, int]] | np.ndarray | None = None
     extremities: bool = True
@@ -308,7 +311,6 @@ class Settings:
 
 
 #: Laplace-Beltrami basis size of the ZoomOut refinement (:mod:`meshcorr.stages.refine`): the default of ``refine_k``.
-REFINE_K: int = Settings.refine_k
 
 
 def as_settings(settings: Settings | None, overrides: dict) -> Settings:

@@ -23,6 +23,8 @@ from ..runtime.checks import check_int
 from ..errors import ParameterError
 
 
+#: k, the eigenpairs of the affinity (the paper: 6); the embedding has ``k - 1`` dimensions.
+N_EIGENPAIRS = 6
 def gaussian_affinity(D: np.ndarray, sigma: float | None = None, *, overwrite: bool = False) -> np.ndarray:
     """Gaussian affinity matrix of a distance matrix.
 
@@ -113,7 +115,7 @@ def top_eigenpairs(A, k: int, *, random_state: int | None = 0) -> tuple[np.ndarr
     return values, sign_convention(vectors)
 
 
-def spectral_embedding(A, k: int = 6, *, scale: bool = True, random_state: int | None = 0
+def spectral_embedding(A, k: int = N_EIGENPAIRS, *, scale: bool = True, random_state: int | None = 0
                        ) -> tuple[np.ndarray, np.ndarray]:
     """Spectral embedding of an affinity matrix, first eigenvector dropped.
 

@@ -60,6 +60,9 @@ EXACT_PAIRS = 4_000_000
 #: Length scales of the anchor term: the embedding's (:func:`embedding_spread`) or the paper's geodesic one.
 ANCHOR_SCALES = ("embedding", "geodesic")
 
+#: h and alpha: anchor pairs of the matching and the weight of each one's geodesic term (the defaults of
+#: :class:`meshcorr.Settings`).
+N_ANCHORS, ANCHOR_WEIGHT = 3, 1.0
 #: Target candidates per source vertex in anchor selection beyond ``EXACT_PAIRS``.
 N_CANDIDATES = 16
 #: Distances and indices of nearest neighbours, ``(n1, k)`` each (:func:`embedding_neighbours`).
@@ -73,7 +76,7 @@ def _blocks(n1: int, n2: int):
 
 
 def select_anchors(X: np.ndarray, Y: np.ndarray, source_geodesics: RowsFn, target_geodesics: RowsFn,
-                   n_anchors: int = 3, *, neighbours: Neighbours | None = None) -> np.ndarray:
+                   n_anchors: int = N_ANCHORS, *, neighbours: Neighbours | None = None) -> np.ndarray:
     """Choose spread-out, well-matched anchor pairs.
 
     Parameters

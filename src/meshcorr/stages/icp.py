@@ -54,8 +54,13 @@ class ICPResult:
     spline: object = None
 
 
-def tps_icp(X: np.ndarray, Y: np.ndarray, *, max_iter: int = 10, n_control: int = 500,
-            anneal: float = 0.5, tol: float = 0.03, rtol: float = 0.01, max_points: int = 1000,
+#: Defaults of :func:`tps_icp` and of :class:`meshcorr.Settings`: most iterations, control points, the
+#: factor lowering the spline regulariser each iteration.
+ICP_ITERATIONS, N_CONTROL, ANNEAL = 10, 500, 0.5
+
+
+def tps_icp(X: np.ndarray, Y: np.ndarray, *, max_iter: int = ICP_ITERATIONS, n_control: int = N_CONTROL,
+            anneal: float = ANNEAL, tol: float = 0.03, rtol: float = 0.01, max_points: int = 1000,
             random_state: int | None = 0) -> ICPResult:
     """Warp the target embedding onto the source embedding.
 

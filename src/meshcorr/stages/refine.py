@@ -63,8 +63,10 @@ from ..core.mesh import Mesh
 from ..spectral.basis import basis_size, orthogonal_fit, pair_bases
 from ..spectral.nearest import nearest_rows, nearest_vertices
 
-__all__ = ["LANDMARK_WEIGHT", "REFINED_MAP", "refine_map", "zoomout"]
+__all__ = ["LANDMARK_WEIGHT", "REFINE_K", "REFINED_MAP", "refine_map", "zoomout"]
 
+#: The Laplace-Beltrami basis size the refinements end with (the default of :class:`meshcorr.Settings`).
+REFINE_K = 40
 #: Sampled pairs each known landmark pair counts as in every ZoomOut fit (see :func:`zoomout`).
 LANDMARK_WEIGHT = 20
 #: The words of a map refused by the refinement (:func:`meshcorr.runtime.checks.check_vertex_map`): whole
@@ -161,7 +163,7 @@ def zoomout(source_basis: np.ndarray, target_basis: np.ndarray, mapping: np.ndar
 
 
 
-def refine_map(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40, k_start: int = 16,
+def refine_map(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = REFINE_K, k_start: int = 16,
                step: int = 2, n_sample: int = 500, bijective: bool = False,
                random_state: int | None = 0, landmarks: np.ndarray | None = None
                ) -> tuple[np.ndarray, list[dict]]:

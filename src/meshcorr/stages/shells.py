@@ -85,7 +85,7 @@ from ..core.map_orientation import orientation_score
 from ..runtime.checks import check_vertex_map
 from ..spectral.basis import basis_size, laplace_basis, orthogonal_fit, pair_bases
 from ..spectral.nearest import nearest_vertices
-from .refine import REFINED_MAP
+from .refine import REFINE_K, REFINED_MAP
 
 #: Weight of the shells' unit normals against coordinates of a unit-area shape.
 NORMAL_WEIGHT = 0.3
@@ -108,7 +108,7 @@ PART_FIRST_SCALE = 16
 PART_MIN_FRACTION = 0.5
 
 
-def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = 40,
+def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = REFINE_K,
                  scales: tuple[int, ...] = SCALES, n_sample: int = N_SAMPLE,
                  landmarks: np.ndarray | None = None, orientation: float | None = None,
                  descriptors: tuple[np.ndarray, np.ndarray] | None = None,

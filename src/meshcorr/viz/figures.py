@@ -23,12 +23,13 @@ from ..runtime.progress import as_progress
 from ..maps.transfer import check_map, pull_back
 from ..maps.colors import UNMAPPED_COLOR, mesh_coloring, scalar_colors
 from .render import Panel, render_panels
+from ..core.geodesics import DEFAULT_GEODESIC
 
 __all__ = ["correspondence_errors", "correspondence_figure", "spectrum_figure"]
 
 
 def correspondence_errors(target, mapping: np.ndarray, truth: np.ndarray, *,
-                          geodesic: str = "heat", cache: GeodesicCache | None = None,
+                          geodesic: str = DEFAULT_GEODESIC, cache: GeodesicCache | None = None,
                           progress=None) -> np.ndarray:
     """Geodesic error of each source vertex, normalised by sqrt(target area).
 
@@ -87,7 +88,7 @@ def _vertices_faces(mesh, name: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 def correspondence_figure(source, target, mapping, path, *, truth=None, error: bool = False,
-                          coloring: str = "parts", geodesic: str = "heat", elev: float = 30.0,
+                          coloring: str = "parts", geodesic: str = DEFAULT_GEODESIC, elev: float = 30.0,
                           azim: float = -60.0, up: str = "z", dpi: int = 100,
                           map_name: str = "the map", cache: GeodesicCache | None = None,
                           progress=None) -> dict:
@@ -181,7 +182,7 @@ def correspondence_figure(source, target, mapping, path, *, truth=None, error: b
     return info
 
 
-def affinity_eigenpairs(vertices, faces, k: int, *, geodesic: str = "heat",
+def affinity_eigenpairs(vertices, faces, k: int, *, geodesic: str = DEFAULT_GEODESIC,
                         random_state: int | None = 0, progress=None) -> tuple[np.ndarray, np.ndarray]:
     """Top ``k`` eigenpairs of a mesh's Gaussian geodesic affinity matrix.
 
@@ -222,7 +223,7 @@ def affinity_eigenpairs(vertices, faces, k: int, *, geodesic: str = "heat",
         return top_eigenpairs(gaussian_affinity(D, overwrite=True), k, random_state=random_state)
 
 
-def spectrum_figure(vertices, faces, path, *, n_eigenvectors: int = 6, geodesic: str = "heat",
+def spectrum_figure(vertices, faces, path, *, n_eigenvectors: int = 6, geodesic: str = DEFAULT_GEODESIC,
                     scale: bool = True, random_state: int | None = 0, elev: float = 30.0,
                     azim: float = -60.0, up: str = "z", dpi: int = 100, progress=None) -> np.ndarray:
     """Eigenvectors and spectral embedding of a mesh, written as a PNG.

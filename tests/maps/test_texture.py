@@ -18,15 +18,15 @@ def _checker() -> Image.Image:
 
 
 @pytest.fixture(scope="module")
-def pair():
+def figure_and_rigid_copy():
     shape = ds.figure()
     copy, truth = ds.rigid_copy(shape, random_state=4)
     return shape, copy, truth
 
 
 @pytest.fixture()
-def textured(pair, tmp_path):
-    _, copy, _ = pair
+def textured(figure_and_rigid_copy, tmp_path):
+    _, copy, _ = figure_and_rigid_copy
     uv = (copy.vertices[:, :2] - copy.vertices[:, :2].min(axis=0)) / np.ptp(copy.vertices[:, :2], axis=0)
     mesh = trimesh.Trimesh(copy.vertices, copy.faces, process=False,
                            visual=trimesh.visual.TextureVisuals(uv=uv, image=_checker()))
@@ -34,8 +34,8 @@ def textured(pair, tmp_path):
     return tmp_path / "target.obj", uv
 
 
-def test_uvs_and_texture_carried_through_the_map(pair, textured, tmp_path):
-    shape, copy, truth = pair
+def test_uvs_and_texture_carried_through_the_map(figure_and_rigid_copy, textured, tmp_path):
+    shape, copy, truth = figure_and_rigid_copy
     path, uv = textured
     target = read_textured_obj(path)
     np.testing.assert_allclose(target.vertices, copy.vertices, atol=1e-6)  # OBJ keeps 8 digits
@@ -65,8 +65,8 @@ def test_uv_seams_are_merged_back_into_one_surface(tmp_path):
     np.testing.assert_allclose(mesh.corner_uv[1], [[0.6, 0], [1, 1], [0.5, 0.6]])
 
 
-def test_texture_errors(pair, textured, tmp_path):
-    shape, copy, _ = pair
+def test_texture_errors(figure_and_rigid_copy, textured, tmp_path):
+    shape, copy, _ = figure_and_rigid_copy
     path, uv = textured
     plain = tmp_path / "plain.obj"
     trimesh.Trimesh(copy.vertices, copy.faces, process=False).export(plain)
@@ -90,9 +90,9 @@ def test_texture_errors(pair, textured, tmp_path):
 # ---------------------------------------------------------------- notebook
 
 
-def test_notebook_view_renders_offscreen(pair):
+def test_notebook_view_renders_offscreen(figure_and_rigid_copy):
     pytest.importorskip("plotly")
-    shape, copy, truth = pair
+    shape, copy, truth = figure_and_rigid_copy
     result = meshcorr.match(shape, copy, refine=False)
     figure = result.show()
     source_trace, target_trace = figure.data
@@ -105,9 +105,9 @@ def test_notebook_view_renders_offscreen(pair):
     np.testing.assert_array_equal(np.asarray(same.data[0].vertexcolor), np.asarray(source_trace.vertexcolor))
 
 
-def test_notebook_view_errors(pair):
+def test_notebook_view_errors(figure_and_rigid_copy):
     pytest.importorskip("plotly")
-    shape, copy, truth = pair
+    shape, copy, truth = figure_and_rigid_copy
     with pytest.raises(ParameterError, match="entries but the source mesh has"):
         meshcorr.viz.show(shape, copy, truth[:-1])
     with pytest.raises(ParameterError, match="one RGB row per target vertex"):
@@ -120,17 +120,17 @@ def test_obj_with_uvs_but_no_image_is_refused(tmp_path):
         read_textured_obj(tmp_path / "bare.obj")
 
 
-def test_notebook_view_without_plotly_says_how_to_install_it(pair, monkeypatch):
-    shape, copy, truth = pair
+def test_notebook_view_without_plotly_says_how_to_install_it(figure_and_rigid_copy, monkeypatch):
+    shape, copy, truth = figure_and_rigid_copy
     monkeypatch.setitem(sys.modules, "plotly.graph_objects", None)
     with pytest.raises(ParameterError, match=r"pip install 'meshcorr\[notebook\]'"):
         meshcorr.viz.show(shape, copy, truth)
 
 
-def test_correspondence_figure_takes_any_mesh_form(pair, tmp_path):
+def test_correspondence_figure_takes_any_mesh_form(figure_and_rigid_copy, tmp_path):
     pytest.importorskip("matplotlib")
     from meshcorr.viz.figures import correspondence_figure
 
-    shape, copy, truth = pair
+    shape, copy, truth = figure_and_rigid_copy
     info = correspondence_figure(shape, meshcorr.as_mesh(copy), truth, tmp_path / "f.png", truth=truth)
     assert info["mean_error"] == 0.0 and (tmp_path / "f.png").stat().st_size > 1000

@@ -19,15 +19,15 @@ from meshcorr.shapes.prepared import FORMAT_VERSION, PreparedShape, mesh_digest
 
 
 @pytest.fixture(scope="module")
-def pair():
+def creature_poses():
     a, b = ds.creature(resolution=1), ds.creature(resolution=1, pose="bent")
     return (a.vertices, a.faces), (b.vertices, b.faces)
 
 
 @pytest.mark.parametrize("mode", ["dense", "scalable"])
-def test_prepared_shapes_give_the_map_of_the_meshes_bit_for_bit(pair, mode, tmp_path):
-    direct = meshcorr.match(*pair, mode=mode)
-    shapes = [prepare(mesh, mode=mode) for mesh in pair]
+def test_prepared_shapes_give_the_map_of_the_meshes_bit_for_bit(creature_poses, mode, tmp_path):
+    direct = meshcorr.match(*creature_poses, mode=mode)
+    shapes = [prepare(mesh, mode=mode) for mesh in creature_poses]
     from_prepared = meshcorr.match(*shapes, mode=mode)
     np.testing.assert_array_equal(from_prepared.map, direct.map)
     np.testing.assert_array_equal(from_prepared.source_embedding, direct.source_embedding)
@@ -35,25 +35,25 @@ def test_prepared_shapes_give_the_map_of_the_meshes_bit_for_bit(pair, mode, tmp_
     assert "geodesics" not in from_prepared.timings and "embedding" not in from_prepared.timings
     for name, shape in zip("ab", shapes):
         shape.save(tmp_path / f"{name}.npz")
-    loaded = [PreparedShape.load(tmp_path / f"{name}.npz", mesh=mesh) for name, mesh in zip("ab", pair)]
+    loaded = [PreparedShape.load(tmp_path / f"{name}.npz", mesh=mesh) for name, mesh in zip("ab", creature_poses)]
     np.testing.assert_array_equal(meshcorr.match(*loaded, mode=mode).map, direct.map)
     # Reused in the same process (rows cached by the first match) and mixed with a mesh.
-    np.testing.assert_array_equal(meshcorr.match(shapes[0], pair[1], mode=mode).map, direct.map)
+    np.testing.assert_array_equal(meshcorr.match(shapes[0], creature_poses[1], mode=mode).map, direct.map)
 
 
-def test_pickled_shape_is_its_file(pair):
-    shape = prepare(pair[0], mode="scalable")
+def test_pickled_shape_is_its_file(creature_poses):
+    shape = prepare(creature_poses[0], mode="scalable")
     copy = pickle.loads(pickle.dumps(shape))
     assert copy.settings == shape.settings and copy.digest == shape.digest
     np.testing.assert_array_equal(copy.spectrum.embedding, shape.spectrum.embedding)
     assert not copy.spectrum.embedding.flags.writeable
-    np.testing.assert_array_equal(meshcorr.match(copy, pair[1], mode="scalable").map,
-                                  meshcorr.match(shape, pair[1], mode="scalable").map)
+    np.testing.assert_array_equal(meshcorr.match(copy, creature_poses[1], mode="scalable").map,
+                                  meshcorr.match(shape, creature_poses[1], mode="scalable").map)
 
 
-def test_file_header_is_documented_json(pair, tmp_path):
+def test_file_header_is_documented_json(creature_poses, tmp_path):
     path = tmp_path / "a.npz"
-    shape = prepare(pair[0], k=5, random_state=3)
+    shape = prepare(creature_poses[0], k=5, random_state=3)
     shape.save(path)
     with np.load(path, allow_pickle=False) as data:
         header = json.loads(data["header"].tobytes().decode())
@@ -65,11 +65,11 @@ def test_file_header_is_documented_json(pair, tmp_path):
     assert "PreparedShape(" in repr(shape) and "n_vertices=500" in repr(shape)
 
 
-def test_load_refuses_another_mesh_other_settings_and_other_versions(pair, tmp_path):
+def test_load_refuses_another_mesh_other_settings_and_other_versions(creature_poses, tmp_path):
     path = tmp_path / "a.npz"
-    prepare(pair[0]).save(path)
+    prepare(creature_poses[0]).save(path)
     with pytest.raises(PreparedShapeError, match="prepared for another mesh"):
-        PreparedShape.load(path, mesh=pair[1])
+        PreparedShape.load(path, mesh=creature_poses[1])
     with pytest.raises(PreparedShapeError, match=r"other settings: k=6 \(asked: 5\)"):
         PreparedShape.load(path, settings=dict(SHAPE_SETTINGS, k=5))
     with pytest.raises(PreparedShapeError, match=r"other settings: k=6 \(asked: 8\)"):  # some settings only
@@ -98,25 +98,25 @@ def test_load_refuses_another_mesh_other_settings_and_other_versions(pair, tmp_p
         PreparedShape.load(tmp_path / "missing.npz")
 
 
-def test_match_refuses_shapes_prepared_with_other_settings_or_mode(pair):
-    shape = prepare(pair[0], random_state=1)
+def test_match_refuses_shapes_prepared_with_other_settings_or_mode(creature_poses):
+    shape = prepare(creature_poses[0], random_state=1)
     with pytest.raises(PreparedShapeError, match=r"source .* random_state=1 \(asked: 0\)"):
-        meshcorr.match(shape, pair[1])
+        meshcorr.match(shape, creature_poses[1])
     with pytest.raises(PreparedShapeError, match=r"target .* random_state=1 \(asked: 0\)"):
-        meshcorr.match(pair[1], shape)
+        meshcorr.match(creature_poses[1], shape)
     with pytest.raises(PreparedShapeError, match=r"mode='dense' \(asked: 'scalable'\)"):
-        meshcorr.match(prepare(pair[0]), pair[1], mode="scalable")
+        meshcorr.match(prepare(creature_poses[0]), creature_poses[1], mode="scalable")
     # The sample count does not matter to the dense mode, and is refused in the scalable one.
-    dense = prepare(pair[0], n_samples=30)
-    np.testing.assert_array_equal(meshcorr.match(dense, pair[1]).map, meshcorr.match(*pair).map)
+    dense = prepare(creature_poses[0], n_samples=30)
+    np.testing.assert_array_equal(meshcorr.match(dense, creature_poses[1]).map, meshcorr.match(*creature_poses).map)
     with pytest.raises(PreparedShapeError, match=r"n_samples=30 \(asked: 48\)"):
-        meshcorr.match(prepare(pair[0], mode="scalable", n_samples=30), pair[1], mode="scalable")
+        meshcorr.match(prepare(creature_poses[0], mode="scalable", n_samples=30), creature_poses[1], mode="scalable")
 
 
-def test_a_baseline_takes_the_mesh_of_a_prepared_shape(pair):
-    shape = prepare(pair[0])
-    np.testing.assert_array_equal(meshcorr.match(shape, pair[1], method="icp").map,
-                                  meshcorr.match(*pair, method="icp").map)
+def test_a_baseline_takes_the_mesh_of_a_prepared_shape(creature_poses):
+    shape = prepare(creature_poses[0])
+    np.testing.assert_array_equal(meshcorr.match(shape, creature_poses[1], method="icp").map,
+                                  meshcorr.match(*creature_poses, method="icp").map)
 
 
 @pytest.mark.parametrize("options, message", [
@@ -127,14 +127,14 @@ def test_a_baseline_takes_the_mesh_of_a_prepared_shape(pair):
     ({"random_state": 1.5}, "'random_state' parameter must be an int"),
     ({"mode": "fast"}, "'mode' parameter must be one of"),
 ])
-def test_prepare_checks_its_options(pair, options, message):
+def test_prepare_checks_its_options(creature_poses, options, message):
     with pytest.raises(ParameterError, match=message):
-        prepare(pair[0], **options)
+        prepare(creature_poses[0], **options)
 
 
-def test_n_landmarks_was_renamed_n_samples(pair, tmp_path, capsys):
+def test_n_landmarks_was_renamed_n_samples(creature_poses, tmp_path, capsys):
     with pytest.raises(ParameterError, match="Unknown setting 'n_landmarks' \\('n_landmarks' is now 'n_samples'\\)"):
-        meshcorr.match(*pair, n_landmarks=48)
+        meshcorr.match(*creature_poses, n_landmarks=48)
     shape = ds.creature(resolution=1)
     import trimesh
 
@@ -148,31 +148,31 @@ def test_n_landmarks_was_renamed_n_samples(pair, tmp_path, capsys):
     assert code == 3 and "No such landmark file" in capsys.readouterr().err
 
 
-def test_prepared_shapes_with_user_landmarks_give_the_same_map(pair):
+def test_prepared_shapes_with_user_landmarks_give_the_same_map(creature_poses):
     landmarks = [(0, 0), (250, 250)]
-    shapes = [prepare(mesh) for mesh in pair]
+    shapes = [prepare(mesh) for mesh in creature_poses]
     np.testing.assert_array_equal(meshcorr.match(*shapes, landmarks=landmarks).map,
-                                  meshcorr.match(*pair, landmarks=landmarks).map)
+                                  meshcorr.match(*creature_poses, landmarks=landmarks).map)
     np.testing.assert_array_equal(meshcorr.match(*shapes, extremities=False).map,
-                                  meshcorr.match(*pair, extremities=False).map)
+                                  meshcorr.match(*creature_poses, extremities=False).map)
 
 
-def test_prepared_shape_carries_the_per_pair_quantities_through_its_file(pair, tmp_path):
+def test_prepared_shape_carries_the_per_pair_quantities_through_its_file(creature_poses, tmp_path):
     """What prepare computes for the pairs (curvature table, orientation regions, the distortion's source
     rows, the extremities) is there after save/load, and the loaded shape gives the same map."""
     from meshcorr.choice.extremities import spectrum_extremities
     from meshcorr.choice.selection import distortion_sources
 
-    shapes = [prepare(mesh, mode="scalable") for mesh in pair]
+    shapes = [prepare(mesh, mode="scalable") for mesh in creature_poses]
     for shape in shapes:
         kinds = {key[0] for key in shape.mesh.store}
         assert {"curvature_table", "orientation_regions"} <= kinds
         assert set(map(int, distortion_sources(shape.n_vertices, 0))) <= set(shape.spectrum.rows)
         assert ("extremities", 0) in shape.spectrum.memo and "spread" in shape.spectrum.memo
-    direct = meshcorr.match(*pair, mode="scalable")
+    direct = meshcorr.match(*creature_poses, mode="scalable")
     for name, shape in zip("ab", shapes):
         shape.save(tmp_path / f"{name}.npz")
-    loaded = [PreparedShape.load(tmp_path / f"{name}.npz", mesh=mesh) for name, mesh in zip("ab", pair)]
+    loaded = [PreparedShape.load(tmp_path / f"{name}.npz", mesh=mesh) for name, mesh in zip("ab", creature_poses)]
     for shape, original in zip(loaded, shapes):
         key = ("curvature_table", 0.045)
         np.testing.assert_array_equal(shape.mesh.store[key], original.mesh.store[key])
@@ -184,4 +184,4 @@ def test_prepared_shape_carries_the_per_pair_quantities_through_its_file(pair, t
     np.testing.assert_array_equal(meshcorr.match(*loaded, mode="scalable").map, direct.map)
     # A stale file (made for the other mesh) is still refused before any of it is used.
     with pytest.raises(PreparedShapeError, match="another mesh"):
-        PreparedShape.load(tmp_path / "a.npz", mesh=pair[1])
+        PreparedShape.load(tmp_path / "a.npz", mesh=creature_poses[1])

@@ -26,21 +26,6 @@ ERROR_TOLERANCE = 0.06
 IOU_TOLERANCE = 0.75
 
 
-@pytest.fixture(scope="module")
-def pair():
-    """The creature at rest (source side) and bent, rotated, moved and re-indexed (target side).
-
-    Returns the two meshes and ``truth``: source vertex -> its target vertex.
-    """
-    rest = ds.creature(resolution=1)
-    bent = ds.creature(resolution=1, pose="bent", random_state=1)
-    moved, index = ds.rigid_copy(bent, random_state=3)
-    truth = index[ds.ground_truth(rest, bent)]
-    back = ds.ground_truth(bent, rest)[np.argsort(index)]  # target vertex -> source vertex
-    return as_mesh((rest.vertices, rest.faces), name="rest"), as_mesh((moved.vertices, moved.faces), name="bent"), \
-        truth, back
-
-
 def _error(target, mapping, truth):
     return float(geodesic_errors(target, mapping, truth).mean())
 
@@ -50,14 +35,14 @@ def _iou(a, b):
 
 
 @pytest.fixture(scope="module")
-def plane_part(pair):
-    source, target, truth, back = pair
+def plane_part(creature_rest_and_bent_moved):
+    source, target, truth, back = creature_rest_and_bent_moved
     part, kept = cuts.cut_by_plane(source, keep=0.7, random_state=0)
     return part, kept, meshcorr.match(part, target, partial="source")
 
 
-def test_a_plane_cut_maps_into_the_right_region_of_the_whole(pair, plane_part):
-    source, target, truth, back = pair
+def test_a_plane_cut_maps_into_the_right_region_of_the_whole(creature_rest_and_bent_moved, plane_part):
+    source, target, truth, back = creature_rest_and_bent_moved
     part, kept, result = plane_part
     assert result.partial == "source" and result.map.shape == (part.n_vertices,) and (result.map >= 0).all()
     assert _error(target, result.map, truth[kept]) < ERROR_TOLERANCE
@@ -73,8 +58,8 @@ def test_a_plane_cut_maps_into_the_right_region_of_the_whole(pair, plane_part):
     assert result.orientation_reliable is True
 
 
-def test_the_part_starts_from_the_default_map_and_is_aligned_by_its_shells(pair, plane_part):
-    source, target, truth, back = pair
+def test_the_part_starts_from_the_default_map_and_is_aligned_by_its_shells(creature_rest_and_bent_moved, plane_part):
+    source, target, truth, back = creature_rest_and_bent_moved
     part, kept, result = plane_part
     assert "shells" in result.timings and result.params["shells"] is True
     # One start is the part matched as a whole shape (its cut closed), as the default mode would.
@@ -85,8 +70,8 @@ def test_the_part_starts_from_the_default_map_and_is_aligned_by_its_shells(pair,
     assert _error(target, plain.map, truth[kept]) < ERROR_TOLERANCE
 
 
-def test_removed_geodesic_balls(pair):
-    source, target, truth, back = pair
+def test_removed_geodesic_balls(creature_rest_and_bent_moved):
+    source, target, truth, back = creature_rest_and_bent_moved
     part, kept = cuts.remove_balls(source, keep=0.8, n_balls=3, random_state=0)
     assert 0.7 < part.area / source.area < 0.85  # 0.76: a severed piece rejoins only at 0.91
     result = meshcorr.match(part, target, partial="source")
@@ -96,8 +81,8 @@ def test_removed_geodesic_balls(pair):
     assert _iou(result.matched_region, inside[back]) > IOU_TOLERANCE
 
 
-def test_reverse_mode_maps_the_whole_source_onto_a_part_target(pair):
-    source, target, truth, back = pair
+def test_reverse_mode_maps_the_whole_source_onto_a_part_target(creature_rest_and_bent_moved):
+    source, target, truth, back = creature_rest_and_bent_moved
     part, kept = cuts.cut_by_plane(target, keep=0.75, random_state=1)
     result = meshcorr.match(source, part, partial="target")
     assert result.map.shape == (source.n_vertices,)
@@ -120,16 +105,16 @@ def _suspicion(a, b):
     return partiality_suspicion(a, b, _diameter(a), _diameter(b))
 
 
-def test_undeclared_part_warns_and_names_the_mode(pair):
-    source, target, truth, back = pair
+def test_undeclared_part_warns_and_names_the_mode(creature_rest_and_bent_moved):
+    source, target, truth, back = creature_rest_and_bent_moved
     part, _ = cuts.cut_by_plane(source, keep=0.7, random_state=2)  # area / diameter^2: 0.67 x the whole's
     with pytest.warns(PartialShapeWarning, match=r"partial='source'.*--partial source"):
         meshcorr.match(part, target, refine=False, extremities=False)
     assert "partial='target'" in _suspicion(target, part)
 
 
-def test_whole_shapes_and_small_holes_do_not_warn(pair):
-    source, target, truth, back = pair
+def test_whole_shapes_and_small_holes_do_not_warn(creature_rest_and_bent_moved):
+    source, target, truth, back = creature_rest_and_bent_moved
     with warnings.catch_warnings():
         warnings.simplefilter("error", PartialShapeWarning)
         meshcorr.match(source, target, refine=False, extremities=False)
@@ -187,8 +172,8 @@ def test_result_with_a_matched_region_saves_and_loads(plane_part, tmp_path):
     assert "partial" in result._repr_html_() and "matched_area_fraction" in repr(result)
 
 
-def test_prepared_shapes_give_the_same_partial_map(pair, plane_part):
-    source, target, truth, back = pair
+def test_prepared_shapes_give_the_same_partial_map(creature_rest_and_bent_moved, plane_part):
+    source, target, truth, back = creature_rest_and_bent_moved
     part, kept, result = plane_part
     again = meshcorr.match(meshcorr.prepare(part, fill_holes=False), meshcorr.prepare(target, fill_holes=False),
                            partial="source")
@@ -196,10 +181,11 @@ def test_prepared_shapes_give_the_same_partial_map(pair, plane_part):
     np.testing.assert_array_equal(again.matched_region, result.matched_region)
 
 
-def test_a_shape_prepared_with_its_holes_closed_is_refused_for_a_partial_match(plane_part, pair):
+def test_a_shape_prepared_with_its_holes_closed_is_refused_for_a_partial_match(plane_part,
+                                                                              creature_rest_and_bent_moved):
     part = plane_part[0]
     with pytest.raises(PreparedShapeError, match=r"fill_holes=True \(asked: False\).*fill_holes=False"):
-        meshcorr.match(meshcorr.prepare(part), pair[1], partial="source")
+        meshcorr.match(meshcorr.prepare(part), creature_rest_and_bent_moved[1], partial="source")
 
 
 def _write(path, mesh):
@@ -208,8 +194,8 @@ def _write(path, mesh):
     return path
 
 
-def test_cli_partial_json_reports_the_matched_region(pair, plane_part, tmp_path, capsys):
-    source, target, truth, back = pair
+def test_cli_partial_json_reports_the_matched_region(creature_rest_and_bent_moved, plane_part, tmp_path, capsys):
+    source, target, truth, back = creature_rest_and_bent_moved
     part, kept, result = plane_part
     src, tgt = _write(tmp_path / "part.off", part), _write(tmp_path / "whole.ply", target)
     out = tmp_path / "map.txt"
@@ -233,37 +219,38 @@ def test_cli_partial_json_reports_the_matched_region(pair, plane_part, tmp_path,
     (dict(partial="source", symmetry="cost"), "symmetry='cost' is not available"),
     (dict(partial="source", extremities=False), "starts from matched extremities or from landmarks"),
 ])
-def test_options_that_do_not_go_with_partial_are_refused(pair, plane_part, options, message):
-    source, target, truth, back = pair
+def test_options_that_do_not_go_with_partial_are_refused(creature_rest_and_bent_moved, plane_part, options, message):
+    source, target, truth, back = creature_rest_and_bent_moved
     part, kept, _ = plane_part
     with pytest.raises(PartialityError, match=message):
         meshcorr.match(part, target, **options)
 
 
-def test_a_closed_shape_declared_a_part_is_refused(pair, plane_part):
-    source, target, truth, back = pair
+def test_a_closed_shape_declared_a_part_is_refused(creature_rest_and_bent_moved, plane_part):
+    source, target, truth, back = creature_rest_and_bent_moved
     part, kept, _ = plane_part
     with pytest.raises(PartialityError, match=r"closed surface.*use partial='target'"):
         meshcorr.match(target, part, partial="source")
 
 
-def test_a_declared_part_larger_than_the_whole_is_refused(pair):
-    source, target, truth, back = pair
+def test_a_declared_part_larger_than_the_whole_is_refused(creature_rest_and_bent_moved):
+    source, target, truth, back = creature_rest_and_bent_moved
     holed, _ = cuts.punch_holes(source, n_holes=3, hole_area=0.01, random_state=0)  # open, nearly whole
     part, _ = cuts.cut_by_plane(target, keep=0.6, random_state=2)
     with pytest.raises(PartialityError, match=r"the target looks like the part.*use partial='target'"):
         meshcorr.match(holed, part, partial="source")
 
 
-def test_no_start_at_all_is_refused(plane_part, pair):
-    source, target, truth, back = pair
+def test_no_start_at_all_is_refused(plane_part, creature_rest_and_bent_moved):
+    source, target, truth, back = creature_rest_and_bent_moved
     part, kept, _ = plane_part
     with pytest.raises(PartialityError, match="No start for a partial map"):
         match_part(part, target, geodesic_rows(part), geodesic_rows(target), extremities=False)
 
 
-def test_cli_refuses_partial_with_bijective_without_a_traceback(plane_part, pair, tmp_path, capsys):
-    source, target, truth, back = pair
+def test_cli_refuses_partial_with_bijective_without_a_traceback(plane_part, creature_rest_and_bent_moved, tmp_path,
+                                                                capsys):
+    source, target, truth, back = creature_rest_and_bent_moved
     part, kept, _ = plane_part
     src, tgt = _write(tmp_path / "part.off", part), _write(tmp_path / "whole.off", target)
     code = main(["match", str(src), str(tgt), "-o", str(tmp_path / "map.txt"), "--partial", "source",
@@ -273,16 +260,16 @@ def test_cli_refuses_partial_with_bijective_without_a_traceback(plane_part, pair
     assert not (tmp_path / "map.txt").exists()
 
 
-def test_a_part_whose_area_at_the_fitted_scale_exceeds_the_whole_is_refused(pair, plane_part):
-    source, target, truth, back = pair
+def test_a_part_whose_area_at_the_fitted_scale_exceeds_the_whole_is_refused(creature_rest_and_bent_moved, plane_part):
+    source, target, truth, back = creature_rest_and_bent_moved
     part, kept, result = plane_part
     check_part_not_larger(part, target, 1.0, role="source")  # 0.7 of the area at the same scale: fine
     with pytest.raises(PartialityError, match=r"the source is larger: 1\.\d\d times the target's area"):
         check_part_not_larger(part, target, 1.5, role="source")  # 0.7 x 1.5^2 = 1.6
 
 
-def test_a_point_cloud_is_refused_in_the_partial_mode(pair, plane_part):
-    source, target, truth, back = pair
+def test_a_point_cloud_is_refused_in_the_partial_mode(creature_rest_and_bent_moved, plane_part):
+    source, target, truth, back = creature_rest_and_bent_moved
     part, kept, _ = plane_part
     with pytest.raises(PartialityError, match="needs triangle meshes: .* is a point cloud"):
         meshcorr.match(part.vertices, target, partial="source")

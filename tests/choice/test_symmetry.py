@@ -47,7 +47,7 @@ def bend(P, angle=0.5):
 
 
 @pytest.fixture(scope="module")
-def pair():
+def creature_and_bent_copy_with_mirror():
     """Source, a bent, rotated, scaled, re-indexed copy, the true map and its mirror image."""
     P, F, reflection = creature()
     rng = np.random.default_rng(1)
@@ -60,9 +60,9 @@ def pair():
 
 
 @pytest.fixture(scope="module")
-def mirrored_target(pair):
+def mirrored_target(creature_and_bent_copy_with_mirror):
     """The target reflected in space (faces reversed to stay outward): now the *other* map is right."""
-    _, tgt, truth, mirror = pair
+    _, tgt, truth, mirror = creature_and_bent_copy_with_mirror
     return Mesh(tgt.vertices * [1, 1, -1], tgt.faces[:, ::-1]), mirror, truth
 
 
@@ -73,14 +73,14 @@ def mean_distance(mesh, mapping, truth):
 # -- orientation ------------------------------------------------------------------------------
 
 
-def test_orientation_score_of_true_map_is_high_and_of_mirror_low(pair):
-    src, tgt, truth, mirror = pair
+def test_orientation_score_of_true_map_is_high_and_of_mirror_low(creature_and_bent_copy_with_mirror):
+    src, tgt, truth, mirror = creature_and_bent_copy_with_mirror
     assert orientation_score(src, tgt, truth) > 0.95
     assert orientation_score(src, tgt, mirror) < 0.05
 
 
-def test_orientation_score_is_robust_to_vertex_noise(pair):
-    src, tgt, truth, mirror = pair
+def test_orientation_score_is_robust_to_vertex_noise(creature_and_bent_copy_with_mirror):
+    src, tgt, truth, mirror = creature_and_bent_copy_with_mirror
     rng = np.random.default_rng(0)
     noisy = truth.copy()
     hit = rng.random(len(noisy)) < 0.2  # a fifth of the vertices mapped to a random neighbour
@@ -93,8 +93,8 @@ def test_orientation_score_is_robust_to_vertex_noise(pair):
     assert orientation_score(src, tgt, noisy_mirror) < 0.2
 
 
-def test_orientation_ignores_face_winding_of_the_input(pair):
-    src, tgt, truth, _ = pair
+def test_orientation_ignores_face_winding_of_the_input(creature_and_bent_copy_with_mirror):
+    src, tgt, truth, _ = creature_and_bent_copy_with_mirror
     rng = np.random.default_rng(3)
     faces = tgt.faces.copy()
     flip = rng.random(len(faces)) < 0.3
@@ -144,8 +144,8 @@ def test_non_orientable_strip_is_reported():
     assert not o.reliable and "orientable" in o.reason
 
 
-def test_orientation_score_bad_maps(pair):
-    src, tgt, truth, _ = pair
+def test_orientation_score_bad_maps(creature_and_bent_copy_with_mirror):
+    src, tgt, truth, _ = creature_and_bent_copy_with_mirror
     with pytest.raises(ParameterError, match="one entry per source vertex"):
         orientation_score(src, tgt, truth[:-1])
     bad = truth.copy()
@@ -262,8 +262,8 @@ def test_metric_distortion_is_zero_for_an_isometry_and_shares_rows():
 
 
 @pytest.fixture(scope="module")
-def results(pair, mirrored_target):
-    src, tgt, _, _ = pair
+def results(creature_and_bent_copy_with_mirror, mirrored_target):
+    src, tgt, _, _ = creature_and_bent_copy_with_mirror
     mtgt = mirrored_target[0]
     return {
         "auto": meshcorr.match(src, tgt),
@@ -283,8 +283,9 @@ def test_near_tied_costs_put_the_mirror_among_the_candidates(results):
 
 
 @pytest.mark.parametrize("key, which", [("auto", 2), ("auto-mirrored-target", 1)])
-def test_auto_maps_to_the_right_side_from_both_sign_sets(results, pair, mirrored_target, key, which):
-    src, tgt, truth, mirror = pair
+def test_auto_maps_to_the_right_side_from_both_sign_sets(results, creature_and_bent_copy_with_mirror, mirrored_target,
+                                                          key, which):
+    src, tgt, truth, mirror = creature_and_bent_copy_with_mirror
     target, right, wrong = (tgt, truth, mirror) if which == 2 else mirrored_target
     result = results[key]
     scale = np.sqrt(target.area)
@@ -306,8 +307,8 @@ def test_cost_cannot_tell_the_two_sides_apart(results):
         assert result.runner_up.cost == pytest.approx(result.configuration.cost, rel=1e-6)
 
 
-def test_mirror_option_gives_the_other_side(results, pair):
-    _, tgt, truth, mirror = pair
+def test_mirror_option_gives_the_other_side(results, creature_and_bent_copy_with_mirror):
+    _, tgt, truth, mirror = creature_and_bent_copy_with_mirror
     result = results["mirror"]
     assert mean_distance(tgt, result.map, mirror) / np.sqrt(tgt.area) < 0.05
     summary = result.summary()
@@ -326,13 +327,13 @@ def test_mirror_option_gives_the_other_side(results, pair):
 
 
 @pytest.mark.parametrize("only", [0, 1])
-def test_candidates_are_widened_when_the_right_map_is_missing(pair, monkeypatch, only):
+def test_candidates_are_widened_when_the_right_map_is_missing(creature_and_bent_copy_with_mirror, monkeypatch, only):
     # Score a single near-tied configuration: rank 0 or 1, one of which is the mirror
     # image. With the mirror alone no candidate preserves orientation, so the pipeline
     # must widen the set and still find the right side.
     import meshcorr.choice.symmetry as pipeline
 
-    src, tgt, truth, mirror = pair
+    src, tgt, truth, mirror = creature_and_bent_copy_with_mirror
     monkeypatch.setattr(pipeline, "candidate_ranks", lambda configurations: [only])
     result = meshcorr.match(src, tgt, refine=False)
     scale = np.sqrt(tgt.area)
@@ -360,8 +361,8 @@ def test_open_mesh_warns_that_orientation_is_unreliable():
     ({"refine": "yes"}, "'refine' parameter must be True or False"),
     ({"refine_k": 1}, "'refine_k' parameter must be an int >= 2"),
 ])
-def test_bad_symmetry_options_are_rejected(pair, kwargs, message):
-    src = pair[0]
+def test_bad_symmetry_options_are_rejected(creature_and_bent_copy_with_mirror, kwargs, message):
+    src = creature_and_bent_copy_with_mirror[0]
     with pytest.raises(ParameterError, match=message):
         meshcorr.match(src, src, **kwargs)
 
@@ -370,10 +371,10 @@ def test_bad_symmetry_options_are_rejected(pair, kwargs, message):
 
 
 @pytest.fixture(scope="module")
-def pair_files(pair, tmp_path_factory):
+def creature_files_with_mirror(creature_and_bent_copy_with_mirror, tmp_path_factory):
     import trimesh
 
-    src, tgt, truth, mirror = pair
+    src, tgt, truth, mirror = creature_and_bent_copy_with_mirror
     folder = tmp_path_factory.mktemp("sym")
     paths = folder / "source.off", folder / "target.off"
     for mesh, path in zip((src, tgt), paths):
@@ -381,12 +382,12 @@ def pair_files(pair, tmp_path_factory):
     return str(paths[0]), str(paths[1]), truth, mirror
 
 
-def test_cli_writes_the_alternative_and_reports_candidates(pair_files, tmp_path, capsys):
+def test_cli_writes_the_alternative_and_reports_candidates(creature_files_with_mirror, tmp_path, capsys):
     import json
 
     from meshcorr.cli import main
 
-    src, tgt, truth, mirror = pair_files
+    src, tgt, truth, mirror = creature_files_with_mirror
     out, alt = tmp_path / "map.txt", tmp_path / "mirror.npy"
     code = main(["match", src, tgt, "-o", str(out), "--alternative-out", str(alt), "--json",
                  "--symmetry", "auto", "--no-refine", "--anchor-scale", "geodesic"])
@@ -405,10 +406,10 @@ def test_cli_writes_the_alternative_and_reports_candidates(pair_files, tmp_path,
     (["--symmetry", "left"], "invalid choice"),
     (["--alternative-out", "/no/such/folder/alt.txt"], "does not exist"),
 ])
-def test_cli_symmetry_errors(pair_files, tmp_path, capsys, extra, message):
+def test_cli_symmetry_errors(creature_files_with_mirror, tmp_path, capsys, extra, message):
     from meshcorr.cli import main
 
-    src, tgt, _, _ = pair_files
+    src, tgt, _, _ = creature_files_with_mirror
     with pytest.raises(SystemExit) if "invalid" in message else warnings.catch_warnings():
         code = main(["match", src, tgt, "-o", str(tmp_path / "m.txt"), "-q"] + extra)
         assert code == 2

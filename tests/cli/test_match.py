@@ -14,19 +14,8 @@ from meshcorr import datasets as ds
 from meshcorr.cli import main
 
 
-@pytest.fixture(scope="module")
-def pair(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("pair")
-    shape = ds.tube(n_along=22, n_around=10)
-    copy, truth = ds.rigid_copy(shape, scale=0.5, random_state=2)
-    src, tgt = folder / "source.off", folder / "target.ply"
-    trimesh.Trimesh(shape.vertices, shape.faces, process=False).export(src)
-    trimesh.Trimesh(copy.vertices, copy.faces, process=False).export(tgt)
-    return str(src), str(tgt), truth
-
-
-def test_match_writes_one_index_per_line(pair, tmp_path, capsys):
-    src, tgt, truth = pair
+def test_match_writes_one_index_per_line(tube_files_with_truth, tmp_path, capsys):
+    src, tgt, truth = tube_files_with_truth
     out = tmp_path / "map.txt"
     assert main(["match", src, tgt, "-o", str(out), "--reorder", "greedy"]) == 0
     mapping = np.loadtxt(out, dtype=np.int64)
@@ -34,8 +23,8 @@ def test_match_writes_one_index_per_line(pair, tmp_path, capsys):
     assert "wrote" in capsys.readouterr().err
 
 
-def test_match_npy_and_json_summary(pair, tmp_path, capsys):
-    src, tgt, truth = pair
+def test_match_npy_and_json_summary(tube_files_with_truth, tmp_path, capsys):
+    src, tgt, truth = tube_files_with_truth
     out = tmp_path / "map.npy"
     code = main(["match", src, tgt, "-o", str(out), "--json", "-k", "5", "--reorder", "greedy",
                  "--no-eigenvalue-scaling", "--anchors", "2", "--alpha", "0.5", "--seed", "4",
@@ -70,16 +59,16 @@ def _fail(args, capsys):
     return err
 
 
-def test_missing_file_is_a_clean_error(pair, tmp_path, capsys):
-    _, tgt, _ = pair
+def test_missing_file_is_a_clean_error(tube_files_with_truth, tmp_path, capsys):
+    _, tgt, _ = tube_files_with_truth
     out = tmp_path / "map.txt"
     err = _fail(["match", str(tmp_path / "nope.off"), tgt, "-o", str(out)], capsys)
     assert "meshcorr: error:" in err and "nope.off" in err
     assert not out.exists()
 
 
-def test_non_manifold_mesh_is_a_clean_error(pair, tmp_path, capsys):
-    _, tgt, _ = pair
+def test_non_manifold_mesh_is_a_clean_error(tube_files_with_truth, tmp_path, capsys):
+    _, tgt, _ = tube_files_with_truth
     bad = tmp_path / "fan.off"
     V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0, -1, 0.5]], float)
     F = np.array([[0, 1, 2], [0, 1, 3], [0, 1, 4]])  # one edge shared by three faces
@@ -88,8 +77,8 @@ def test_non_manifold_mesh_is_a_clean_error(pair, tmp_path, capsys):
     assert "non-manifold" in err
 
 
-def test_bad_k_and_missing_output_folder(pair, tmp_path, capsys):
-    src, tgt, _ = pair
+def test_bad_k_and_missing_output_folder(tube_files_with_truth, tmp_path, capsys):
+    src, tgt, _ = tube_files_with_truth
     err = _fail(["match", src, tgt, "-o", str(tmp_path / "m.txt"), "-k", "1"], capsys)
     assert "'k' parameter must be an int >= 2" in err
     err = _fail(["match", src, tgt, "-o", str(tmp_path / "missing" / "m.txt")], capsys)
@@ -108,8 +97,8 @@ def test_bijective_with_unequal_counts_leaves_no_file(tmp_path, capsys):
     assert not [f for f in os.listdir(tmp_path) if f.endswith(".tmp")]
 
 
-def test_console_script_runs_as_a_process(pair, tmp_path):
-    src, tgt, truth = pair
+def test_console_script_runs_as_a_process(tube_files_with_truth, tmp_path):
+    src, tgt, truth = tube_files_with_truth
     out = tmp_path / "map.txt"
     proc = subprocess.run([sys.executable, "-m", "meshcorr", "match", src, tgt, "-o", str(out), "-q"],
                           capture_output=True, text=True, timeout=120)

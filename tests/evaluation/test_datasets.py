@@ -300,7 +300,7 @@ def test_save_example_pair(tmp_path):
 def test_bundled_examples():
     # the files in examples/ are what save_example_pair writes (checked loosely: they
     # are regenerated on one machine, and tessellations may differ in the last bits)
-    directory = Path(__file__).resolve().parents[1] / "examples"
+    directory = Path(__file__).resolve().parents[2] / "examples"
     names = ["creature_rest.off", "creature_bent.off", "creature_rest_to_bent.gt.txt"]
     assert sorted(p.name for p in directory.iterdir()) == sorted(names)
     assert sum((directory / name).stat().st_size for name in names) < 300_000

@@ -18,20 +18,9 @@ from meshcorr.core.validate import validate_mesh
 
 
 @pytest.fixture(scope="module")
-def pair():
-    """The creature at rest and bent, rotated, moved and re-indexed; ``truth``: source -> target vertex."""
-    rest = ds.creature(resolution=1)
-    bent = ds.creature(resolution=1, pose="bent", random_state=1)
-    moved, index = ds.rigid_copy(bent, random_state=3)
-    truth = index[ds.ground_truth(rest, bent)]
-    return as_mesh((rest.vertices, rest.faces), name="rest"), as_mesh((moved.vertices, moved.faces), name="bent"), \
-        truth
-
-
-@pytest.fixture(scope="module")
-def holed(pair):
+def holed(creature_rest_and_bent_moved):
     """Both shapes with 6 holes of 1 % of the area each; ``kept``: input vertex -> whole-shape vertex."""
-    source, target, truth = pair
+    source, target, truth, _ = creature_rest_and_bent_moved
     holed_source, source_kept = cuts.punch_holes(source, n_holes=6, hole_area=0.01, random_state=0)
     holed_target, target_kept = cuts.punch_holes(target, n_holes=6, hole_area=0.01, random_state=10)
     return holed_source, source_kept, holed_target, target_kept
@@ -63,8 +52,8 @@ def test_unfilled_gives_back_the_input(holed):
     assert unfilled(mesh) is mesh
 
 
-def test_closed_meshes_clouds_and_touching_loops_are_left_as_they_are(pair):
-    source = pair[0]
+def test_closed_meshes_clouds_and_touching_loops_are_left_as_they_are(creature_rest_and_bent_moved):
+    source = creature_rest_and_bent_moved[0]
     assert fill_holes(source) is source
     cloud = as_mesh(np.asarray(source.vertices))
     assert fill_holes(cloud) is cloud
@@ -113,8 +102,8 @@ def test_an_image_on_a_cap_goes_to_the_nearest_vertex_of_its_rim(holed):
     np.testing.assert_array_equal(restricted[2:], mapping[2:source.n_input])
 
 
-def test_holes_closed_map_as_well_as_the_whole_shapes(pair, holed):
-    source, target, truth = pair
+def test_holes_closed_map_as_well_as_the_whole_shapes(creature_rest_and_bent_moved, holed):
+    source, target, truth, _ = creature_rest_and_bent_moved
     holed_source, source_kept, holed_target, target_kept = holed
     clean = geodesic_errors(target, meshcorr.match(source, target).map, truth).mean()
     errors = {}

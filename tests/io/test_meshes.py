@@ -1,4 +1,4 @@
-"""Tests for meshcorr.io: mesh reading keeps vertex order, errors and warnings, map files."""
+"""meshcorr.io.meshes: mesh reading keeps vertex order, errors and warnings; writing meshes."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import trimesh
 from meshcorr import io as mio
 import meshcorr.io.meshes  # noqa: F401 (mio.meshes: the module whose trimesh parses)
 from meshcorr.errors import MeshError, MeshWarning, ParameterError
-from meshcorr.io import atomic_write, read_map, read_mesh, write_map, write_mesh
+from meshcorr.io import read_mesh, write_mesh
 
 OCTA_V = np.array(
     [[1.0, 0, 0], [-1.0, 0, 0], [0, 1.0, 0], [0, -1.0, 0], [0, 0, 1.0], [0, 0, -1.0]]
@@ -369,98 +369,6 @@ def test_name_is_used_in_messages(tmp_path):
     path.write_text("OFF\n3 1 0\nx y z\n")
     with pytest.raises(MeshError, match=r"^source mesh \S*bad.off, line 3: vertex 0: expected three numbers"):
         read_mesh(path, name="source mesh")
-
-
-@pytest.mark.parametrize("name", ["map.txt", "map.map", "map", "map.npy"])
-def test_map_round_trip(tmp_path, name):
-    mapping = np.array([3, 0, 2, 2, 1, 123456789])
-    path = tmp_path / name
-    write_map(path, mapping)
-    result = read_map(path)
-    assert result.dtype == np.int64
-    np.testing.assert_array_equal(result, mapping)
-    assert sorted(os.listdir(tmp_path)) == [name]
-
-
-def test_text_map_format(tmp_path):
-    write_map(tmp_path / "m.txt", np.array([4, 0, 7], dtype=np.int32))
-    assert (tmp_path / "m.txt").read_text() == "4\n0\n7\n"
-
-
-def test_npy_map_format(tmp_path):
-    write_map(tmp_path / "m.npy", [4, 0, 7])
-    np.testing.assert_array_equal(np.load(tmp_path / "m.npy"), [4, 0, 7])
-
-
-def test_read_map_missing(tmp_path):
-    with pytest.raises(ParameterError, match="No such file"):
-        read_map(tmp_path / "missing.txt")
-
-
-def test_read_map_non_integer_text(tmp_path):
-    path = tmp_path / "m.txt"
-    path.write_text("1\n\n2.5\n3\n")
-    with pytest.raises(ParameterError, match=r"line 3: expected one integer per line .*, got '2.5'"):
-        read_map(path)
-
-
-def test_read_map_non_integer_npy(tmp_path):
-    path = tmp_path / "m.npy"
-    np.save(path, np.array([0.5, 1.0]))
-    with pytest.raises(ParameterError, match="1-D integer array"):
-        read_map(path)
-
-
-def test_read_map_corrupt_npy(tmp_path):
-    path = tmp_path / "m.npy"
-    path.write_bytes(b"not numpy")
-    with pytest.raises(ParameterError, match="could not be read as a .npy array"):
-        read_map(path)
-
-
-def test_write_map_rejects_non_integer(tmp_path):
-    with pytest.raises(ParameterError, match="1-D integer array"):
-        write_map(tmp_path / "m.txt", np.array([[1, 2], [3, 4]]))
-    with pytest.raises(ParameterError, match="1-D integer array"):
-        write_map(tmp_path / "m.txt", np.array([1.5, 2.0]))
-    assert os.listdir(tmp_path) == []
-
-
-def test_atomic_write_failure_leaves_nothing(tmp_path):
-    def writer(file):
-        file.write(b"partial")
-        raise RuntimeError("disk full")
-
-    with pytest.raises(RuntimeError, match="disk full"):
-        atomic_write(tmp_path / "out.bin", writer)
-    assert os.listdir(tmp_path) == []
-
-
-def test_atomic_write_failure_keeps_old_file(tmp_path):
-    path = tmp_path / "out.txt"
-    path.write_bytes(b"old")
-
-    def writer(file):
-        file.write(b"new but broken")
-        raise KeyboardInterrupt
-
-    with pytest.raises(KeyboardInterrupt):
-        atomic_write(path, writer)
-    assert path.read_bytes() == b"old"
-    assert os.listdir(tmp_path) == ["out.txt"]
-
-
-def test_atomic_write_replaces_file(tmp_path):
-    path = tmp_path / "out.txt"
-    path.write_bytes(b"old")
-    atomic_write(path, lambda file: file.write(b"new"))
-    assert path.read_bytes() == b"new"
-    assert os.listdir(tmp_path) == ["out.txt"]
-
-
-def test_atomic_write_missing_directory(tmp_path):
-    with pytest.raises(ParameterError, match="does not exist"):
-        atomic_write(tmp_path / "no" / "out.txt", lambda file: file.write(b"x"))
 
 
 @pytest.mark.parametrize("ext", ["off", "obj", "ply", "stl"])

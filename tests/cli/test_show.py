@@ -33,7 +33,7 @@ def _differing(image: np.ndarray) -> float:
 
 
 @pytest.fixture(scope="module")
-def pair(tmp_path_factory):
+def bent_tube_files(tmp_path_factory):
     """A straight tube, a bent and re-indexed copy and the true map (not the identity), as files.
 
     Also the bent tube in its own vertex order ("bent") with its map onto the re-indexed copy
@@ -60,13 +60,14 @@ def pair(tmp_path_factory):
     return paths
 
 
-def _args(pair, *extra):
-    return [str(pair["source"]), str(pair["target"]), str(pair["map"]), *map(str, extra)]
+def _args(bent_tube_files, *extra):
+    return [str(bent_tube_files["source"]), str(bent_tube_files["target"]), str(bent_tube_files["map"]),
+            *map(str, extra)]
 
 
-def test_show_draws_both_meshes(pair, tmp_path):
+def test_show_draws_both_meshes(bent_tube_files, tmp_path):
     out = tmp_path / "show.png"
-    assert main(["show", *_args(pair, "-o", out)]) == 0
+    assert main(["show", *_args(bent_tube_files, "-o", out)]) == 0
     image = _read_png(out)
     half = image.shape[1] // 2
     # Each half holds a mesh: a good share of coloured pixels, and several colours (parts).
@@ -77,30 +78,30 @@ def test_show_draws_both_meshes(pair, tmp_path):
     # target's colours at the same places, so the halves agree but for the titles.
     # Measured: 1.7 % of pixels differ through the map, 24 % when the map is ignored.
     same = tmp_path / "same.png"
-    assert main(["show", str(pair["bent"]), str(pair["target"]), str(pair["same_map"]),
+    assert main(["show", str(bent_tube_files["bent"]), str(bent_tube_files["target"]), str(bent_tube_files["same_map"]),
                  "-o", str(same)]) == 0
     assert _differing(_read_png(same)) < 0.05
 
 
-def test_show_with_truth_adds_a_row_and_error_mode(pair, tmp_path, capsys):
+def test_show_with_truth_adds_a_row_and_error_mode(bent_tube_files, tmp_path, capsys):
     one = tmp_path / "one.png"
     two = tmp_path / "two.png"
     err = tmp_path / "err.png"
-    assert main(["show", *_args(pair, "-o", one)]) == 0
-    assert main(["show", *_args(pair, "-o", two, "--gt", pair["gt"])]) == 0
+    assert main(["show", *_args(bent_tube_files, "-o", one)]) == 0
+    assert main(["show", *_args(bent_tube_files, "-o", two, "--gt", bent_tube_files["gt"])]) == 0
     assert "mean 0.0000" in capsys.readouterr().err  # the map is the truth
     assert _read_png(two).shape[0] > 1.7 * _read_png(one).shape[0]
     bottom = _read_png(two)[_read_png(two).shape[0] // 2:]
     assert _ink(bottom[:, : bottom.shape[1] // 2]) > 0.05
-    assert main(["show", *_args(pair, "-o", err, "--gt", pair["gt"], "--error")]) == 0
+    assert main(["show", *_args(bent_tube_files, "-o", err, "--gt", bent_tube_files["gt"], "--error")]) == 0
     assert _ink(_read_png(err)) > 0.05
     # A wrong map (reversed) with the true one: only the ground-truth row draws the source
     # in the target's colours at the same places.
     wrong = tmp_path / "wrong.txt"
-    write_map(wrong, pair["same_map_array"][::-1])
+    write_map(wrong, bent_tube_files["same_map_array"][::-1])
     rows = tmp_path / "rows.png"
-    assert main(["show", str(pair["bent"]), str(pair["target"]), str(wrong), "-o", str(rows),
-                 "--gt", str(pair["same_map"])]) == 0
+    assert main(["show", str(bent_tube_files["bent"]), str(bent_tube_files["target"]), str(wrong), "-o", str(rows),
+                 "--gt", str(bent_tube_files["same_map"])]) == 0
     assert "mean 0.0000" not in capsys.readouterr().err.splitlines()[-1]  # status lines go to stderr
     image = _read_png(rows)
     middle = image.shape[0] // 2
@@ -108,14 +109,14 @@ def test_show_with_truth_adds_a_row_and_error_mode(pair, tmp_path, capsys):
     assert _differing(image[middle:]) < 0.05
 
 
-def test_error_mode_colours_follow_the_error(pair, tmp_path):
+def test_error_mode_colours_follow_the_error(bent_tube_files, tmp_path):
     # Error colours run from blue (0) to red (largest), every level a different colour.
     ramp = scalar_colors(np.linspace(0.0, 1.0, 11), "error").astype(int)
     assert np.all(ramp[:4, 2] > ramp[:4, 0] + 50) and np.all(ramp[-4:, 0] > ramp[-4:, 2] + 100)
     assert len(np.unique(ramp, axis=0)) == 11
     # A map right on one end of the tube and sent far away on the other end.
-    truth = pair["truth"]
-    params = pair["target_shape"].params
+    truth = bent_tube_files["truth"]
+    params = bent_tube_files["target_shape"].params
     wrong = truth.copy()
     far_end = int(np.argmax(params[:, 0]))
     near = datasets.tube(n_along=14, n_around=8, bend=0.0).params[:, 0] < 0.5
@@ -123,8 +124,8 @@ def test_error_mode_colours_follow_the_error(pair, tmp_path):
     bad = tmp_path / "bad.txt"
     write_map(bad, wrong)
     out = tmp_path / "err.png"
-    argv = [str(pair["source"]), str(pair["target"]), str(bad), "-o", str(out),
-            "--gt", str(pair["gt"]), "--error"]
+    argv = [str(bent_tube_files["source"]), str(bent_tube_files["target"]), str(bad), "-o", str(out),
+            "--gt", str(bent_tube_files["gt"]), "--error"]
     assert main(["show", *argv]) == 0
     image = _read_png(out)
     source_half = image[: int(0.85 * image.shape[0]), : image.shape[1] // 2]  # above the colour bar
@@ -134,18 +135,18 @@ def test_error_mode_colours_follow_the_error(pair, tmp_path):
     assert red.mean() > 0.01 and blue.mean() > 0.01, (red.mean(), blue.mean())
 
 
-def test_show_errors_are_one_line(pair, tmp_path, capsys):
+def test_show_errors_are_one_line(bent_tube_files, tmp_path, capsys):
     short = tmp_path / "short.txt"
-    write_map(short, np.zeros(pair["n_source"] - 1, dtype=int))
+    write_map(short, np.zeros(bent_tube_files["n_source"] - 1, dtype=int))
     far = tmp_path / "far.txt"
-    write_map(far, np.full(pair["n_source"], pair["n_target"]))
+    write_map(far, np.full(bent_tube_files["n_source"], bent_tube_files["n_target"]))
     cases = [
-        ([str(pair["source"]), str(pair["target"]), str(short), "-o", str(tmp_path / "a.png")],
+        ([str(bent_tube_files["source"]), str(bent_tube_files["target"]), str(short), "-o", str(tmp_path / "a.png")],
          "entries but the source mesh has"),
-        ([str(pair["source"]), str(pair["target"]), str(far), "-o", str(tmp_path / "b.png")],
+        ([str(bent_tube_files["source"]), str(bent_tube_files["target"]), str(far), "-o", str(tmp_path / "b.png")],
          "outside the target's vertex range"),
-        (_args(pair, "-o", tmp_path / "missing" / "c.png"), "does not exist"),
-        (_args(pair, "-o", tmp_path / "d.png", "--error"), "--gt"),
+        (_args(bent_tube_files, "-o", tmp_path / "missing" / "c.png"), "does not exist"),
+        (_args(bent_tube_files, "-o", tmp_path / "d.png", "--error"), "--gt"),
     ]
     for number, (argv, message) in enumerate(cases):
         assert main(["show", *argv]) == (3 if number < 2 else 2)  # a map file that does not fit is bad data
@@ -197,11 +198,11 @@ def _ply_colors(path) -> np.ndarray:
     return np.asarray(mesh.visual.vertex_colors)[:, :3]
 
 
-def test_transfer_colours_follow_the_map(pair, tmp_path):
+def test_transfer_colours_follow_the_map(bent_tube_files, tmp_path):
     rng = np.random.default_rng(0)
-    target = pair["target_shape"]
-    colors = rng.integers(0, 256, size=(pair["n_target"], 3))
-    mapping = rng.integers(0, pair["n_target"], size=pair["n_source"])
+    target = bent_tube_files["target_shape"]
+    colors = rng.integers(0, 256, size=(bent_tube_files["n_target"], 3))
+    mapping = rng.integers(0, bent_tube_files["n_target"], size=bent_tube_files["n_source"])
     mapping[:3] = -1
     map_file, color_file = tmp_path / "m.txt", tmp_path / "c.txt"
     write_map(map_file, mapping)
@@ -210,16 +211,16 @@ def test_transfer_colours_follow_the_map(pair, tmp_path):
     write_mesh(coloured_target, target.vertices, target.faces, vertex_colors=colors.astype(np.uint8))
     for attribute in (str(color_file), "colors"):
         out = tmp_path / "out.ply"
-        assert main(["transfer", str(pair["source"]), str(coloured_target), str(map_file),
+        assert main(["transfer", str(bent_tube_files["source"]), str(coloured_target), str(map_file),
                      "--attribute", attribute, "-o", str(out)]) == 0
         got = _ply_colors(out)
         np.testing.assert_array_equal(got[3:], colors[mapping[3:]])
         np.testing.assert_array_equal(got[:3], np.full((3, 3), 170))
 
 
-def test_read_attribute_tables(pair, tmp_path):
-    n = pair["n_target"]
-    target = pair["target_shape"]
+def test_read_attribute_tables(bent_tube_files, tmp_path):
+    n = bent_tube_files["n_target"]
+    target = bent_tube_files["target_shape"]
     rng = np.random.default_rng(1)
     field = rng.normal(size=n)
     np.save(tmp_path / "column.npy", field[:, None])  # one column: a scalar field
@@ -240,36 +241,36 @@ def test_read_attribute_tables(pair, tmp_path):
             read_attribute(str(tmp_path / "bad.txt"), None, target.vertices, target.faces)
 
 
-def test_transfer_scalar_field(pair, tmp_path):
-    field = np.linspace(0.0, 1.0, pair["n_target"])
+def test_transfer_scalar_field(bent_tube_files, tmp_path):
+    field = np.linspace(0.0, 1.0, bent_tube_files["n_target"])
     field_file, values_out, out = tmp_path / "f.npy", tmp_path / "v.npy", tmp_path / "s.ply"
     np.save(field_file, field)
-    assert main(["transfer", *_args(pair, "--attribute", field_file, "-o", out,
+    assert main(["transfer", *_args(bent_tube_files, "--attribute", field_file, "-o", out,
                                     "--values-out", values_out)]) == 0
-    np.testing.assert_allclose(np.load(values_out), field[pair["truth"]], atol=0)
+    np.testing.assert_allclose(np.load(values_out), field[bent_tube_files["truth"]], atol=0)
     got = _ply_colors(out)
-    np.testing.assert_array_equal(got, scalar_colors(field[pair["truth"]], vmin=0.0, vmax=1.0))
+    np.testing.assert_array_equal(got, scalar_colors(field[bent_tube_files["truth"]], vmin=0.0, vmax=1.0))
 
 
-def test_transfer_errors_are_one_line(pair, tmp_path, capsys):
+def test_transfer_errors_are_one_line(bent_tube_files, tmp_path, capsys):
     wrong = tmp_path / "wrong.txt"
-    np.savetxt(wrong, np.zeros(pair["n_target"] + 1))
+    np.savetxt(wrong, np.zeros(bent_tube_files["n_target"] + 1))
     cases = [  # (arguments, exit code: 2 usage, 3 an attribute file that cannot be used, message)
-        (_args(pair, "--attribute", wrong, "-o", tmp_path / "a.ply"), 3, "one row per target vertex"),
-        (_args(pair, "--attribute", tmp_path / "nope.txt", "-o", tmp_path / "b.ply"), 2, "no such file"),
-        (_args(pair, "--attribute", "foo", "-o", tmp_path / "b.ply"), 2, "not a known attribute"),
-        (_args(pair, "--attribute", tmp_path, "-o", tmp_path / "b.ply"), 3, "cannot be read"),
-        (_args(pair, "--attribute", "colors", "-o", tmp_path / "c.ply"), 2, "no per-vertex colours"),
-        (_args(pair, "--attribute", "parts", "-o", tmp_path / "d.off"), 2, ".ply or .obj"),
-        (_args(pair, "--attribute", "xyz", "-o", tmp_path / "no" / "e.ply"), 2, "does not exist"),
+        (_args(bent_tube_files, "--attribute", wrong, "-o", tmp_path / "a.ply"), 3, "one row per target vertex"),
+        (_args(bent_tube_files, "--attribute", tmp_path / "nope.txt", "-o", tmp_path / "b.ply"), 2, "no such file"),
+        (_args(bent_tube_files, "--attribute", "foo", "-o", tmp_path / "b.ply"), 2, "not a known attribute"),
+        (_args(bent_tube_files, "--attribute", tmp_path, "-o", tmp_path / "b.ply"), 3, "cannot be read"),
+        (_args(bent_tube_files, "--attribute", "colors", "-o", tmp_path / "c.ply"), 2, "no per-vertex colours"),
+        (_args(bent_tube_files, "--attribute", "parts", "-o", tmp_path / "d.off"), 2, ".ply or .obj"),
+        (_args(bent_tube_files, "--attribute", "xyz", "-o", tmp_path / "no" / "e.ply"), 2, "does not exist"),
     ]
     for argv, code, message in cases:
         assert main(["transfer", *argv]) == code
         err = capsys.readouterr().err
         assert err.startswith("meshcorr: error:") and message in err, err
     far = tmp_path / "far.txt"  # a map file that does not fit the meshes: bad input data
-    write_map(far, np.full(pair["n_source"], pair["n_target"]))
-    assert main(["transfer", str(pair["source"]), str(pair["target"]), str(far), "--attribute", "xyz",
+    write_map(far, np.full(bent_tube_files["n_source"], bent_tube_files["n_target"]))
+    assert main(["transfer", str(bent_tube_files["source"]), str(bent_tube_files["target"]), str(far), "--attribute", "xyz",
                  "-o", str(tmp_path / "f.ply")]) == 3
     assert "outside the target's vertex range" in capsys.readouterr().err
     assert not list(tmp_path.glob("*.ply"))
@@ -296,9 +297,9 @@ def test_colours_move_between_clouds(tmp_path, capsys):
     assert "target.npy has no per-vertex colours" in capsys.readouterr().err
 
 
-def test_embed_draws_eigenvectors(pair, tmp_path, capsys):
+def test_embed_draws_eigenvectors(bent_tube_files, tmp_path, capsys):
     out = tmp_path / "embed.png"
-    assert main(["embed", str(pair["source"]), "-o", str(out), "-n", "2"]) == 0
+    assert main(["embed", str(bent_tube_files["source"]), "-o", str(out), "-n", "2"]) == 0
     line = capsys.readouterr().err
     values = [float(v) for v in line.split("eigenvalues:")[1].split(",")]
     assert len(values) == 2 and values[0] >= values[1] > 0
@@ -309,8 +310,8 @@ def test_embed_draws_eigenvectors(pair, tmp_path, capsys):
         assert _ink(image[:, column * quarter:(column + 1) * quarter]) > 0.03
 
 
-def test_embed_errors_are_one_line(pair, tmp_path, capsys):
-    assert main(["embed", str(pair["source"]), "-o", str(tmp_path / "a.png"), "-n", "0"]) == 2
+def test_embed_errors_are_one_line(bent_tube_files, tmp_path, capsys):
+    assert main(["embed", str(bent_tube_files["source"]), "-o", str(tmp_path / "a.png"), "-n", "0"]) == 2
     assert "n_eigenvectors" in capsys.readouterr().err
     assert main(["embed", str(tmp_path / "none.off"), "-o", str(tmp_path / "b.png")]) == 3  # bad input data
     assert capsys.readouterr().err.startswith("meshcorr: error:")

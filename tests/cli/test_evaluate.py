@@ -21,7 +21,7 @@ def save_off(path, shape):
 
 
 @pytest.fixture(scope="module")
-def pair(tmp_path_factory):
+def tube_files_for_evaluation(tmp_path_factory):
     """A tube and a rigid, re-indexed copy; truth[i] = copy's vertex of vertex i."""
     folder = tmp_path_factory.mktemp("eval")
     shape = ds.tube(n_along=16, n_around=8)
@@ -37,15 +37,15 @@ def pair(tmp_path_factory):
     return folder, src, tgt
 
 
-def test_evaluate_perfect_map_text(pair, capsys):
-    folder, src, tgt = pair
+def test_evaluate_perfect_map_text(tube_files_for_evaluation, capsys):
+    folder, src, tgt = tube_files_for_evaluation
     assert main(["evaluate", src, tgt, str(folder / "truth.txt"), "--gt", str(folder / "truth.txt")]) == 0
     out = capsys.readouterr().out
     assert "mean geodesic error:   0.0000" in out and "100.0 % / 100.0 % / 100.0 %" in out
 
 
-def test_evaluate_json_with_vts_and_sym(pair, capsys):
-    folder, src, tgt = pair
+def test_evaluate_json_with_vts_and_sym(tube_files_for_evaluation, capsys):
+    folder, src, tgt = tube_files_for_evaluation
     code = main(["evaluate", src, tgt, str(folder / "shifted.txt"), "--gt", str(folder / "a.vts"),
                  "--gt", str(folder / "b.vts"), "--sym", str(folder / "b.sym.vts"), "--json",
                  "--thresholds", "0.5,1"])
@@ -60,9 +60,9 @@ def test_evaluate_json_with_vts_and_sym(pair, capsys):
     assert report["total_error"] == pytest.approx(report["mean_error"] * 152 * report["sqrt_area"])
 
 
-def test_evaluate_curve_png(pair, tmp_path):
+def test_evaluate_curve_png(tube_files_for_evaluation, tmp_path):
     pytest.importorskip("matplotlib")
-    folder, src, tgt = pair
+    folder, src, tgt = tube_files_for_evaluation
     png = tmp_path / "curve.png"
     assert main(["evaluate", src, tgt, str(folder / "shifted.txt"), "--gt", str(folder / "truth.txt"),
                  "--curve", str(png)]) == 0
@@ -77,9 +77,9 @@ def test_evaluate_curve_png(pair, tmp_path):
      "No such ground-truth", 3),
     (lambda f: [str(f / "truth.txt"), "--gt", "identity", "--thresholds", "x"], "--thresholds", 2),
 ])
-def test_evaluate_errors_exit_2_or_3_with_one_line(pair, capsys, change, message, code):
+def test_evaluate_errors_exit_2_or_3_with_one_line(tube_files_for_evaluation, capsys, change, message, code):
     """Bad usage exits 2, bad input data 3."""
-    folder, src, tgt = pair
+    folder, src, tgt = tube_files_for_evaluation
     assert main(["evaluate", src, tgt, *change(folder)]) == code
     err = capsys.readouterr().err
     assert err.startswith("meshcorr: error:") and message in err and err.count("\n") == 1

@@ -11,7 +11,6 @@ import sys
 
 import numpy as np
 import pytest
-from .test_cli import pair  # noqa: F401 - the tube pair fixture (source.off, target.ply)
 
 from meshcorr.cli import EXIT_INPUT, EXIT_USAGE, main
 
@@ -26,8 +25,8 @@ def _run(args, capsys):
     return code, out, err
 
 
-def test_output_equal_to_an_input_is_refused_before_the_work(pair, tmp_path, capsys):
-    src, tgt, _ = pair
+def test_output_equal_to_an_input_is_refused_before_the_work(tube_files_with_truth, tmp_path, capsys):
+    src, tgt, _ = tube_files_with_truth
     before = open(tgt, "rb").read()
     code, _, err = _run(["match", src, tgt, "-o", tgt, *FAST], capsys)
     assert code == EXIT_USAGE and "is the input TARGET" in err
@@ -38,16 +37,16 @@ def test_output_equal_to_an_input_is_refused_before_the_work(pair, tmp_path, cap
     assert code == EXIT_USAGE and "is the input SOURCE" in err
 
 
-def test_two_outputs_on_one_path_are_refused(pair, tmp_path, capsys):
-    src, tgt, _ = pair
+def test_two_outputs_on_one_path_are_refused(tube_files_with_truth, tmp_path, capsys):
+    src, tgt, _ = tube_files_with_truth
     out = str(tmp_path / "m.txt")
     code, _, err = _run(["match", src, tgt, "-o", out, "--alternative-out", out, *FAST], capsys)
     assert code == EXIT_USAGE and "are the same file" in err
     assert not os.path.exists(out)
 
 
-def test_unwritable_outputs_are_found_before_the_work(pair, tmp_path, capsys, monkeypatch):
-    src, tgt, _ = pair
+def test_unwritable_outputs_are_found_before_the_work(tube_files_with_truth, tmp_path, capsys, monkeypatch):
+    src, tgt, _ = tube_files_with_truth
     import meshcorr.pipeline.run
 
     def no_work(*args, **kwargs):  # the checks must come first
@@ -78,8 +77,8 @@ def test_unwritable_outputs_are_found_before_the_work(pair, tmp_path, capsys, mo
     assert locked.read_text() == "keep"
 
 
-def test_a_failed_report_leaves_no_map(pair, tmp_path, capsys, monkeypatch):
-    src, tgt, _ = pair
+def test_a_failed_report_leaves_no_map(tube_files_with_truth, tmp_path, capsys, monkeypatch):
+    src, tgt, _ = tube_files_with_truth
     import meshcorr.viz.report
 
     def broken(*args, **kwargs):
@@ -93,15 +92,15 @@ def test_a_failed_report_leaves_no_map(pair, tmp_path, capsys, monkeypatch):
     assert os.listdir(tmp_path) == []
 
 
-def test_negative_seed_is_a_usage_error(pair, tmp_path, capsys):
-    src, tgt, _ = pair
+def test_negative_seed_is_a_usage_error(tube_files_with_truth, tmp_path, capsys):
+    src, tgt, _ = tube_files_with_truth
     with pytest.raises(SystemExit) as exc:
         main(["match", src, tgt, "-o", str(tmp_path / "m.txt"), "--seed=-1"])
     assert exc.value.code == EXIT_USAGE and "expected an integer >= 0, got -1" in capsys.readouterr().err
 
 
-def test_bad_data_and_bad_usage_exit_differently(pair, tmp_path, capsys):
-    src, tgt, _ = pair
+def test_bad_data_and_bad_usage_exit_differently(tube_files_with_truth, tmp_path, capsys):
+    src, tgt, _ = tube_files_with_truth
     broken = tmp_path / "cut.off"
     broken.write_text(open(src).read()[:-40])
     code, _, err = _run(["match", str(broken), tgt, "-o", str(tmp_path / "m.txt")], capsys)
@@ -120,8 +119,8 @@ def test_help_lists_the_exit_codes_and_the_k_limit(capsys):
     assert "3    bad input data" in text and "130  interrupted" in text
 
 
-def test_map_on_stdout_and_json_without_output(pair, tmp_path, capsys, monkeypatch):
-    src, tgt, truth = pair
+def test_map_on_stdout_and_json_without_output(tube_files_with_truth, tmp_path, capsys, monkeypatch):
+    src, tgt, truth = tube_files_with_truth
     monkeypatch.chdir(tmp_path)
     code, out, err = _run(["match", src, tgt, "-o", "-", *FAST], capsys)
     assert code == 0 and not os.path.exists("-")
@@ -135,8 +134,8 @@ def test_map_on_stdout_and_json_without_output(pair, tmp_path, capsys, monkeypat
     assert code == EXIT_USAGE and "both write to stdout" in err
 
 
-def test_debug_quiet_and_verbose_after_the_command(pair, tmp_path, capsys, monkeypatch):
-    src, tgt, _ = pair
+def test_debug_quiet_and_verbose_after_the_command(tube_files_with_truth, tmp_path, capsys, monkeypatch):
+    src, tgt, _ = tube_files_with_truth
     code, _, err = _run(["match", src, tgt, "-o", str(tmp_path / "a.txt"), "-v", *FAST], capsys)
     assert code == 0
     assert "matching " in err and "source.off -> target.ply [geodesics] done in" in err
@@ -161,24 +160,24 @@ def test_debug_quiet_and_verbose_after_the_command(pair, tmp_path, capsys, monke
             main(args)
 
 
-def test_gt_takes_one_value_and_leaves_positionals(pair, tmp_path, capsys):
-    src, tgt, _ = pair
+def test_gt_takes_one_value_and_leaves_positionals(tube_files_with_truth, tmp_path, capsys):
+    src, tgt, _ = tube_files_with_truth
     report = tmp_path / "r.html"
     code, _, err = _run(["match", "--report", str(report), "--gt", "identity", src, tgt,
                          "-o", str(tmp_path / "m.txt"), *FAST], capsys)
     assert code == 0 and report.is_file() and "wrote the report" in err
 
 
-def test_new_match_options_reach_the_pipeline(pair, tmp_path, capsys):
-    src, tgt, _ = pair
+def test_new_match_options_reach_the_pipeline(tube_files_with_truth, tmp_path, capsys):
+    src, tgt, _ = tube_files_with_truth
     code, out, _ = _run(["match", src, tgt, "--json", "--control-points", "50", "--anneal", "0.8",
                          "--refine-k", "12", "--scalable-above", "100000", "--reorder", "greedy"], capsys)
     params = json.loads(out)["params"]
     assert code == 0 and (params["n_control"], params["anneal"], params["refine_k"]) == (50, 0.8, 12)
 
 
-def test_show_transfer_embed_status_goes_to_stderr_and_q_silences_it(pair, tmp_path, capsys):
-    src, tgt, truth = pair
+def test_show_transfer_embed_status_goes_to_stderr_and_q_silences_it(tube_files_with_truth, tmp_path, capsys):
+    src, tgt, truth = tube_files_with_truth
     mapping = tmp_path / "m.txt"
     mapping.write_text("".join(f"{i}\n" for i in truth))
     out = tmp_path / "t.ply"
@@ -192,22 +191,22 @@ def test_show_transfer_embed_status_goes_to_stderr_and_q_silences_it(pair, tmp_p
     assert code == EXIT_USAGE and "--values-out" in err and "is the input MAP" in err
 
 
-def test_missing_map_names_the_argument(pair, tmp_path, capsys):
-    src, tgt, _ = pair
+def test_missing_map_names_the_argument(tube_files_with_truth, tmp_path, capsys):
+    src, tgt, _ = tube_files_with_truth
     code, _, err = _run(["evaluate", src, tgt, str(tmp_path / "none.txt"), "--gt", "identity"], capsys)
     assert code == EXIT_INPUT and "none.txt (MAP)" in err
 
 
-def test_binary_map_file_is_refused(pair, tmp_path, capsys):
-    src, tgt, _ = pair
+def test_binary_map_file_is_refused(tube_files_with_truth, tmp_path, capsys):
+    src, tgt, _ = tube_files_with_truth
     binary = tmp_path / "m.txt"
     binary.write_bytes(bytes(range(256)))
     code, _, err = _run(["evaluate", src, tgt, str(binary), "--gt", "identity"], capsys)
     assert code == EXIT_INPUT and "not a text file" in err
 
 
-def test_evaluate_into_a_closed_pipe_exits_quietly(pair, tmp_path):
-    src, tgt, truth = pair
+def test_evaluate_into_a_closed_pipe_exits_quietly(tube_files_with_truth, tmp_path):
+    src, tgt, truth = tube_files_with_truth
     mapping = tmp_path / "m.txt"
     mapping.write_text("".join(f"{i}\n" for i in truth))
     command = (f"{sys.executable} -m meshcorr evaluate {src} {tgt} {mapping} --gt identity --json "

@@ -1,4 +1,4 @@
-"""Evaluation: geodesic errors against known answers, ground-truth files, flips, curves."""
+"""Evaluation (meshcorr.evaluation.metrics): geodesic errors against known answers, flips, curves."""
 
 import numpy as np
 import pytest
@@ -8,7 +8,7 @@ from meshcorr import datasets as ds
 from meshcorr.errors import ParameterError
 from meshcorr.evaluation.metrics import (GeodesicCache, _greedy_cover, cumulative_curve, evaluate_map,
                                  feature_point_accuracy, geodesic_errors, scalar_summary)
-from meshcorr.evaluation.ground_truth import GroundTruth, identity_truth, load_ground_truth, read_pairs, read_vts
+from meshcorr.evaluation.ground_truth import GroundTruth, identity_truth
 from meshcorr.core.mesh import Mesh
 
 RADIUS = 2.0
@@ -161,67 +161,6 @@ def test_map_errors(sphere):
 
 
 # ---------------------------------------------------------------- ground-truth files
-
-
-def write(path, lines):
-    path.write_text("".join(f"{line}\n" for line in lines))
-    return path
-
-
-def test_vts_pair_is_one_based(tmp_path):
-    a = write(tmp_path / "a.vts", [1, 3, 3, 5])
-    b = write(tmp_path / "b.vts", [2, 2, 4, 1])
-    truth = load_ground_truth([a, b], n_source=5, n_target=4)
-    np.testing.assert_array_equal(truth.source, [0, 2, 2, 4])
-    np.testing.assert_array_equal(truth.target, [1, 1, 3, 0])
-    assert len(truth) == 4 and "a.vts" in truth.description
-
-
-def test_vts_errors(tmp_path):
-    a = write(tmp_path / "a.vts", [1, 2, 3])
-    with pytest.raises(ParameterError, match="No such ground-truth file"):
-        load_ground_truth([a, tmp_path / "missing.vts"], n_source=3, n_target=3)
-    with pytest.raises(ParameterError, match="has 3 lines and .* has 2"):
-        load_ground_truth([a, write(tmp_path / "b.vts", [1, 2])], n_source=3, n_target=3)
-    with pytest.raises(ParameterError, match="1-based"):
-        read_vts(write(tmp_path / "zero.vts", [0, 1, 2]))
-    with pytest.raises(ParameterError, match="index 9 .* has 3 vertices"):
-        read_vts(write(tmp_path / "big.vts", [1, 9]), n_vertices=3)
-    with pytest.raises(ParameterError, match="line 2: a .vts file holds one integer"):
-        read_vts(write(tmp_path / "text.vts", [1, "x y"]))
-    with pytest.raises(ParameterError, match="is empty"):
-        read_vts(write(tmp_path / "empty.vts", []))
-    with pytest.raises(ParameterError, match="indexes one mesh only"):
-        load_ground_truth(str(a), n_source=3, n_target=3)
-    with pytest.raises(ParameterError, match="must both be .vts"):
-        load_ground_truth([a, tmp_path / "b.txt"], n_source=3, n_target=3)
-
-
-def test_pairs_file_and_dense_map(tmp_path):
-    pairs = read_pairs(write(tmp_path / "p.txt", ["# comment", "0 4", "2,1", "3:0  # trailing"]))
-    np.testing.assert_array_equal(pairs.source, [0, 2, 3])
-    np.testing.assert_array_equal(pairs.target, [4, 1, 0])
-    dense = load_ground_truth(write(tmp_path / "d.txt", [2, -1, 0]), n_source=3, n_target=3)
-    np.testing.assert_array_equal(dense.source, [0, 2])
-    np.testing.assert_array_equal(dense.target, [2, 0])
-    with pytest.raises(ParameterError, match="line 2: mixes"):
-        read_pairs(write(tmp_path / "mixed.txt", ["0 1", "2"]))
-    with pytest.raises(ParameterError, match="line 1: expected a 0-based vertex pair"):
-        read_pairs(write(tmp_path / "bad.txt", ["0 1 2"]))
-    with pytest.raises(ParameterError, match="names target vertex 4, but the target mesh has 3"):
-        load_ground_truth(tmp_path / "p.txt", n_source=5, n_target=3)
-    with pytest.raises(ParameterError, match="names source vertex -2"):
-        GroundTruth([-2], [0]).check(3, 3)
-
-
-def test_identity_and_spec_errors():
-    np.testing.assert_array_equal(load_ground_truth("identity", n_source=3, n_target=3).target, [0, 1, 2])
-    with pytest.raises(ParameterError, match="equal vertex counts"):
-        identity_truth(3, 4)
-    with pytest.raises(ParameterError, match="got 3 items"):
-        load_ground_truth(["a", "b", "c"], n_source=3, n_target=3)
-    with pytest.raises(ParameterError, match="as many source as target"):
-        GroundTruth([0, 1], [0])
 
 
 def test_a_cache_reports_its_solves_and_keeps_the_same_rows(sphere):

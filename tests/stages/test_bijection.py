@@ -61,7 +61,7 @@ def test_unequal_counts_are_refused():
 
 
 @pytest.fixture(scope="module")
-def pair():
+def creature_and_rigid_copy():
     """A creature and a rotated, scaled, re-indexed copy; truth[i] is the copy's vertex of vertex i."""
     shape = datasets.creature(resolution=1)
     copy, truth = datasets.rigid_copy(shape, random_state=3)
@@ -69,10 +69,10 @@ def pair():
 
 
 @pytest.mark.parametrize("refine", [True, False])
-def test_bijective_maps_with_landmarks_are_permutations_that_hold_them(pair, refine):
+def test_bijective_maps_with_landmarks_are_permutations_that_hold_them(creature_and_rigid_copy, refine):
     # One landmark is off by one edge, as a user's often are: pinned into a one-to-one map, it
     # repeats the image of the vertex that truly goes there.
-    shape, copy, truth = pair
+    shape, copy, truth = creature_and_rigid_copy
     ring = np.unique(copy.faces[np.any(copy.faces == truth[200], axis=1)])
     neighbour = int(ring[ring != truth[200]][0])
     picks = np.array([3, 90, 200, 333])
@@ -83,8 +83,8 @@ def test_bijective_maps_with_landmarks_are_permutations_that_hold_them(pair, ref
     assert np.mean(result.map == truth) > 0.9
 
 
-def test_bijective_landmarks_sharing_a_target_are_refused_by_the_cli(pair, tmp_path, capsys):
-    shape, copy, truth = pair
+def test_bijective_landmarks_sharing_a_target_are_refused_by_the_cli(creature_and_rigid_copy, tmp_path, capsys):
+    shape, copy, truth = creature_and_rigid_copy
     paths = []
     for name, s in (("a.off", shape), ("b.off", copy)):
         trimesh.Trimesh(np.asarray(s.vertices), np.asarray(s.faces), process=False).export(tmp_path / name)

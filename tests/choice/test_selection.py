@@ -14,24 +14,11 @@ from meshcorr.core.map_orientation import orientation_score, regional_orientatio
 from meshcorr.choice.selection import ORIENTATION_MIN, MapCandidate, choose_map, energy, score_candidates
 from meshcorr.stages.shells import shell_refine
 
-# A left/right symmetric "person" on a sphere: head, two arms, two legs, a nose in front.
-TIPS = {"head": ((0, 0, 1), 0.9), "nose": ((0, 1, 0.2), 0.35), "arm_l": ((1, 0, 0.3), 0.8),
-        "arm_r": ((-1, 0, 0.3), 0.8), "leg_l": ((0.45, 0, -1), 1.1), "leg_r": ((-0.45, 0, -1), 1.1)}
-
-
-def _person(subdivisions: int = 3):
-    vertices, faces = datasets.sphere(subdivisions=subdivisions)
-    u = vertices / np.linalg.norm(vertices, axis=1, keepdims=True)
-    radius = np.ones(len(u))
-    for direction, height in TIPS.values():
-        d = np.asarray(direction, float) / np.linalg.norm(direction)
-        radius += height * np.exp(-(1 - u @ d) / 0.03)
-    return u * radius[:, None], np.asarray(faces)
-
+from .person import TIPS, person_vertices, scaled_geodesics, tip_vertex
 
 @pytest.fixture(scope="module")
 def person():
-    vertices, faces = _person()
+    vertices, faces = person_vertices()
     mesh = Mesh(vertices, faces, name="person")
     # The sphere's vertices are symmetric under x -> -x: the mirror vertex of each.
     mirror = cKDTree(vertices).query(vertices * [-1, 1, 1])[1]
@@ -39,28 +26,10 @@ def person():
     return mesh, mirror
 
 
-def _geodesics(mesh):
-    from meshcorr.core.geodesics import geodesic_solver
-
-    solver = geodesic_solver(mesh.vertices, mesh.faces, "heat")
-    rows = {}
-
-    def row(i):
-        if i not in rows:
-            rows[i] = solver.distances([int(i)])[0]
-        return rows[i] / 5.0
-    return row
-
-
-def _tip_vertex(mesh, name):
-    d = np.asarray(TIPS[name][0], float)
-    return int(np.argmax(mesh.vertices @ (d / np.linalg.norm(d))))
-
-
 def test_extremities_are_the_six_tips(person):
     mesh, _ = person
-    tips = find_extremities(mesh, _geodesics(mesh), length_unit=5.0)
-    expected = {_tip_vertex(mesh, name) for name in TIPS}
+    tips = find_extremities(mesh, scaled_geodesics(mesh), length_unit=5.0)
+    expected = {tip_vertex(mesh, name) for name in TIPS}
     found = set(tips.vertices.tolist())
     # A vertex near each tip (within a bump radius) is found, and nothing else.
     assert len(found) == 6
@@ -70,7 +39,7 @@ def test_extremities_are_the_six_tips(person):
 
 def test_best_extremity_assignments_are_the_identity_and_its_mirror(person):
     mesh, mirror = person
-    g = _geodesics(mesh)
+    g = scaled_geodesics(mesh)
     tips = find_extremities(mesh, g, length_unit=5.0)
     best = match_extremities(tips, tips, n_best=4)
     # Exact symmetry: the identity and the full mirror cost (about) nothing, partial swaps more.
@@ -91,7 +60,7 @@ def test_a_map_with_swapped_legs_is_seen_region_by_region_and_rejected(person):
     assert regional_orientation(mesh, mesh, swapped).min() < 0.1
     candidates = [MapCandidate("mirror", mirror), MapCandidate("legs swapped", swapped),
                   MapCandidate("right", identity)]
-    g = _geodesics(mesh)
+    g = scaled_geodesics(mesh)
     score_candidates(candidates, mesh, mesh, g, g, reliable=True)
     assert candidates[1].distortion > 2 * candidates[2].distortion
     assert candidates[0].orientation < 0.1
@@ -108,7 +77,7 @@ def test_landmarks_settle_the_left_right_choice(person):
     truth = np.argsort(order)           # source vertex i is target vertex truth[i]
     mirrored = truth[mirror]             # the left/right mirror of the truth
     # Landmarks that say "mirror": the map must follow them, exactly at the landmarks.
-    picks = [_tip_vertex(mesh, n) for n in ("head", "arm_l", "leg_r", "nose")]
+    picks = [tip_vertex(mesh, n) for n in ("head", "arm_l", "leg_r", "nose")]
     pairs = [(int(i), int(mirrored[i])) for i in picks]
     result = meshcorr.match((mesh.vertices, mesh.faces), (target.vertices, target.faces), landmarks=pairs)
     assert all(result.map[i] == j for i, j in pairs)
@@ -144,7 +113,7 @@ def test_the_landmarks_distances_join_the_shells_on_the_fine_schedule(person, mo
     monkeypatch.setattr(pipeline, "shell_refine", recording)
     monkeypatch.setattr(selection, "shell_refine", recording)
     assert SCALES == tuple(range(6, 41, 2))
-    picks = [_tip_vertex(mesh, n) for n in ("head", "arm_l", "leg_r")]
+    picks = [tip_vertex(mesh, n) for n in ("head", "arm_l", "leg_r")]
     pairs = [(i, i) for i in picks]
     result = meshcorr.match(mesh, mesh, landmarks=pairs)
     assert calls and all("scales" not in c for c in calls)  # every candidate on the default schedule
@@ -171,8 +140,8 @@ def test_a_shape_against_its_mirror_image_maps_to_the_reflection():
 
 def test_landmark_map_of_a_copy_is_the_identity(person):
     mesh, _ = person
-    g = _geodesics(mesh)
-    picks = np.array([_tip_vertex(mesh, n) for n in ("head", "arm_l", "leg_r", "nose", "arm_r")])
+    g = scaled_geodesics(mesh)
+    picks = np.array([tip_vertex(mesh, n) for n in ("head", "arm_l", "leg_r", "nose", "arm_r")])
     mapping = landmark_map(g, g, np.stack([picks, picks], axis=1))
     assert np.mean(mapping == np.arange(mesh.n_vertices)) > 0.8
     assert np.all(mapping[picks] == picks)
@@ -264,7 +233,7 @@ def test_a_map_with_swapped_legs_is_repaired_from_its_consistent_part(person):
     # As a candidate of the whole-map choice: only the partly mirrored map is repaired.
     candidates = [MapCandidate("legs swapped", swapped), MapCandidate("right", identity),
                   MapCandidate("mirror", mirror)]
-    g = _geodesics(mesh)
+    g = scaled_geodesics(mesh)
     score_candidates(candidates, mesh, mesh, g, g, reliable=True)
     added = repair_candidates(candidates, mesh, mesh, k=30)
     assert [c.origin for c in added] == ["repaired-legs swapped"]

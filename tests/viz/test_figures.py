@@ -57,7 +57,7 @@ def _check_increasing(counts: list[tuple[int, int]]) -> None:
 
 
 @pytest.fixture(scope="module")
-def pair(tmp_path_factory):
+def tubes_and_maps(tmp_path_factory):
     """A straight tube, a bent and re-indexed copy, the true map and a wrong map (the truth rolled), as
     arrays and files."""
     folder = tmp_path_factory.mktemp("show_progress")
@@ -78,12 +78,12 @@ def pair(tmp_path_factory):
 
 
 @pytest.mark.parametrize("error", [False, True])
-def test_correspondence_figure_reports_its_solves_and_draws_the_same_picture(pair, tmp_path, error):
+def test_correspondence_figure_reports_its_solves_and_draws_the_same_picture(tubes_and_maps, tmp_path, error):
     plain, reported = tmp_path / "plain.png", tmp_path / "reported.png"
-    options = dict(truth=pair["truth"], error=error, dpi=DPI)
-    info = correspondence_figure(pair["source"], pair["target"], pair["mapping"], plain, **options)
+    options = dict(truth=tubes_and_maps["truth"], error=error, dpi=DPI)
+    info = correspondence_figure(tubes_and_maps["source"], tubes_and_maps["target"], tubes_and_maps["mapping"], plain, **options)
     progress = Recorder()
-    assert correspondence_figure(pair["source"], pair["target"], pair["mapping"], reported,
+    assert correspondence_figure(tubes_and_maps["source"], tubes_and_maps["target"], tubes_and_maps["mapping"], reported,
                                  progress=progress, **options) == info
     assert info["mean_error"] > 0.05  # the map is wrong: there were solves to report
     assert np.array_equal(_read_png(plain), _read_png(reported))
@@ -94,23 +94,23 @@ def test_correspondence_figure_reports_its_solves_and_draws_the_same_picture(pai
     assert progress.counts("drawing") == [(0, 1), (1, 1)]
 
 
-def test_without_truth_only_the_drawing_is_reported(pair, tmp_path):
+def test_without_truth_only_the_drawing_is_reported(tubes_and_maps, tmp_path):
     progress = Recorder()
-    assert correspondence_figure(pair["source"], pair["target"], pair["mapping"], tmp_path / "a.png",
+    assert correspondence_figure(tubes_and_maps["source"], tubes_and_maps["target"], tubes_and_maps["mapping"], tmp_path / "a.png",
                                  dpi=DPI, progress=progress) == {}
     assert progress.calls == [("drawing", 0, 1), ("drawing", 1, 1)]
 
 
-def test_a_cache_passed_in_keeps_the_reported_solves(pair, tmp_path):
+def test_a_cache_passed_in_keeps_the_reported_solves(tubes_and_maps, tmp_path):
     cache = GeodesicCache("heat")
     first, second = Recorder(), Recorder()
-    options = dict(truth=pair["truth"], dpi=DPI, cache=cache)
-    info = correspondence_figure(pair["source"], pair["target"], pair["mapping"], tmp_path / "a.png",
+    options = dict(truth=tubes_and_maps["truth"], dpi=DPI, cache=cache)
+    info = correspondence_figure(tubes_and_maps["source"], tubes_and_maps["target"], tubes_and_maps["mapping"], tmp_path / "a.png",
                                  progress=first, **options)
     solves = first.counts("geodesic errors")
     assert cache.n_solves == solves[-1][1] > 0  # the solves went into the given cache
     # Again onto the same target: every row is cached, nothing to solve or report but the drawing.
-    assert correspondence_figure(pair["source"], pair["target"], pair["mapping"], tmp_path / "b.png",
+    assert correspondence_figure(tubes_and_maps["source"], tubes_and_maps["target"], tubes_and_maps["mapping"], tmp_path / "b.png",
                                  progress=second, **options) == info
     assert cache.n_solves == solves[-1][1]
     assert second.stages() == ["drawing"]
@@ -118,8 +118,8 @@ def test_a_cache_passed_in_keeps_the_reported_solves(pair, tmp_path):
 
 
 @pytest.mark.parametrize("geodesic", ["heat", "dijkstra"])
-def test_spectrum_figure_reports_geodesics_and_eigenvectors(pair, tmp_path, geodesic):
-    vertices, faces = pair["source"]
+def test_spectrum_figure_reports_geodesics_and_eigenvectors(tubes_and_maps, tmp_path, geodesic):
+    vertices, faces = tubes_and_maps["source"]
     plain, reported = tmp_path / "plain.png", tmp_path / "reported.png"
     values = spectrum_figure(vertices, faces, plain, n_eigenvectors=1, geodesic=geodesic, dpi=DPI)
     progress = Recorder()
@@ -136,8 +136,8 @@ def test_spectrum_figure_reports_geodesics_and_eigenvectors(pair, tmp_path, geod
     assert progress.counts("eigenvectors") == progress.counts("drawing") == [(0, 1), (1, 1)]
 
 
-def test_show_and_embed_print_progress_lines_unless_quiet(pair, tmp_path, capsys):
-    p = pair["paths"]
+def test_show_and_embed_print_progress_lines_unless_quiet(tubes_and_maps, tmp_path, capsys):
+    p = tubes_and_maps["paths"]
     show = ["show", p["source"], p["target"], p["map"], "--gt", p["gt"], "--dpi", str(DPI)]
     embed = ["embed", p["source"], "-n", "1", "--dpi", str(DPI)]
     # -v: every stage, each line naming what the run is on.

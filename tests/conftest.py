@@ -1,0 +1,47 @@
+"""Fixtures shared by several test modules.
+
+Each fixture is named for what it holds. They keep the module scope the tests had when each module
+defined its own copy: every module that asks for one gets its own, freshly built objects (the meshes'
+per-shape caches are not shared between modules).
+"""
+
+import numpy as np
+import pytest
+import trimesh
+
+from meshcorr import datasets as ds
+from meshcorr.core.mesh import as_mesh
+
+
+@pytest.fixture(scope="module")
+def creature_rest_and_bent_moved():
+    """The creature at rest (source side) and bent, rotated, moved and re-indexed (target side).
+
+    Returns ``(rest, bent, truth, back)``: the two meshes (named "rest" and "bent"), ``truth`` of shape
+    ``(n_rest,)``: source vertex -> its target vertex, and ``back`` of shape ``(n_bent,)``: target vertex
+    -> its source vertex. Used by the tests of holes (meshcorr.core.holes) and partial shapes
+    (meshcorr.pipeline.partial).
+    """
+    rest = ds.creature(resolution=1)
+    bent = ds.creature(resolution=1, pose="bent", random_state=1)
+    moved, index = ds.rigid_copy(bent, random_state=3)
+    truth = index[ds.ground_truth(rest, bent)]
+    back = ds.ground_truth(bent, rest)[np.argsort(index)]  # target vertex -> source vertex
+    return as_mesh((rest.vertices, rest.faces), name="rest"), as_mesh((moved.vertices, moved.faces), name="bent"), \
+        truth, back
+
+
+@pytest.fixture(scope="module")
+def tube_files_with_truth(tmp_path_factory):
+    """A tube (22 x 10) as ``source.off`` and a rotated, half-size, re-indexed copy as ``target.ply``.
+
+    Returns ``(source_path, target_path, truth)`` with the paths as strings and ``truth`` of shape
+    ``(n,)``: source vertex -> its copy's vertex. Used by the command-line tests.
+    """
+    folder = tmp_path_factory.mktemp("pair")
+    shape = ds.tube(n_along=22, n_around=10)
+    copy, truth = ds.rigid_copy(shape, scale=0.5, random_state=2)
+    src, tgt = folder / "source.off", folder / "target.ply"
+    trimesh.Trimesh(shape.vertices, shape.faces, process=False).export(src)
+    trimesh.Trimesh(copy.vertices, copy.faces, process=False).export(tgt)
+    return str(src), str(tgt), truth

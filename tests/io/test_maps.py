@@ -1,0 +1,64 @@
+"""meshcorr.io.maps: map files (text and .npy) round-trip, and their refusals."""
+
+import os
+
+import numpy as np
+import pytest
+
+from meshcorr.errors import ParameterError
+from meshcorr.io import read_map, write_map
+
+
+@pytest.mark.parametrize("name", ["map.txt", "map.map", "map", "map.npy"])
+def test_map_round_trip(tmp_path, name):
+    mapping = np.array([3, 0, 2, 2, 1, 123456789])
+    path = tmp_path / name
+    write_map(path, mapping)
+    result = read_map(path)
+    assert result.dtype == np.int64
+    np.testing.assert_array_equal(result, mapping)
+    assert sorted(os.listdir(tmp_path)) == [name]
+
+
+def test_text_map_format(tmp_path):
+    write_map(tmp_path / "m.txt", np.array([4, 0, 7], dtype=np.int32))
+    assert (tmp_path / "m.txt").read_text() == "4\n0\n7\n"
+
+
+def test_npy_map_format(tmp_path):
+    write_map(tmp_path / "m.npy", [4, 0, 7])
+    np.testing.assert_array_equal(np.load(tmp_path / "m.npy"), [4, 0, 7])
+
+
+def test_read_map_missing(tmp_path):
+    with pytest.raises(ParameterError, match="No such file"):
+        read_map(tmp_path / "missing.txt")
+
+
+def test_read_map_non_integer_text(tmp_path):
+    path = tmp_path / "m.txt"
+    path.write_text("1\n\n2.5\n3\n")
+    with pytest.raises(ParameterError, match=r"line 3: expected one integer per line .*, got '2.5'"):
+        read_map(path)
+
+
+def test_read_map_non_integer_npy(tmp_path):
+    path = tmp_path / "m.npy"
+    np.save(path, np.array([0.5, 1.0]))
+    with pytest.raises(ParameterError, match="1-D integer array"):
+        read_map(path)
+
+
+def test_read_map_corrupt_npy(tmp_path):
+    path = tmp_path / "m.npy"
+    path.write_bytes(b"not numpy")
+    with pytest.raises(ParameterError, match="could not be read as a .npy array"):
+        read_map(path)
+
+
+def test_write_map_rejects_non_integer(tmp_path):
+    with pytest.raises(ParameterError, match="1-D integer array"):
+        write_map(tmp_path / "m.txt", np.array([[1, 2], [3, 4]]))
+    with pytest.raises(ParameterError, match="1-D integer array"):
+        write_map(tmp_path / "m.txt", np.array([1.5, 2.0]))
+    assert os.listdir(tmp_path) == []

@@ -136,14 +136,46 @@ HAND = [
 
 #: Core module -> the test files that exercise it (the cosmic run's test command).
 MODULES = {
-    "anchors": ["tests/test_anchors.py", "tests/test_scalable.py"],
-    "reorder": ["tests/test_reorder.py"],
-    "transfer": ["tests/test_viz.py"],
-    "validate": ["tests/test_validate.py"],
-    "io": ["tests/test_io.py"],
-    "symmetry": ["tests/test_symmetry.py"],
-    "evaluation": ["tests/test_evaluation.py", "tests/test_evaluation_maps.py", "tests/test_cli_evaluate.py"],
+    "anchors": ["tests/stages/test_anchors.py", "tests/test_scalable.py"],
+    "reorder": ["tests/stages/test_reorder.py"],
+    "transfer": ["tests/cli/test_show.py", "tests/maps/test_transfer.py"],
+    "validate": ["tests/core/test_validate.py"],
+    "io": ["tests/io"],
+    "symmetry": ["tests/choice/test_symmetry.py"],
+    "evaluation": ["tests/evaluation/test_metrics.py", "tests/evaluation/test_metrics_maps.py",
+                   "tests/cli/test_evaluate.py"],
 }
+#: Where each cosmic module's source lives since the subpackage layout (issue 30).
+MODULE_FILES = {"anchors": "stages/anchors.py", "reorder": "stages/reorder.py", "transfer": "maps/transfer.py",
+                "validate": "core/validate.py", "io": "io/meshes.py", "symmetry": "choice/symmetry.py",
+                "evaluation": "evaluation/metrics.py"}
+#: The hand mutants' test files before the subpackage layout (issue 30) -> where they are now; the
+#: ``before`` runs use the files of BASE as they were.
+TESTS_NOW = {"tests/test_viz.py": "tests/cli/test_show.py", "tests/test_report.py": "tests/viz/test_report.py",
+             "tests/test_anchors.py": "tests/stages/test_anchors.py", "tests/test_pipeline.py": "tests/pipeline/test_run.py",
+             "tests/test_cli.py": "tests/cli/test_match.py", "tests/test_validate.py": "tests/core/test_validate.py",
+             "tests/test_threads.py": "tests/runtime/test_threads.py", "tests/test_refine.py": "tests/stages/test_refine.py",
+             "tests/test_icp.py": "tests/stages/test_icp.py", "tests/test_symmetry.py": "tests/choice/test_symmetry.py",
+             "tests/test_baselines.py": "tests/baselines/test_baselines.py",
+             "tests/test_cli_evaluate.py": "tests/cli/test_evaluate.py"}
+
+
+def _tests_now(args) -> tuple[str, ...]:
+    """A mutant's ``after`` arguments with its test files where they are now."""
+    out = []
+    for arg in args:
+        file, sep, test = arg.partition("::")
+        out.append(TESTS_NOW.get(file, file) + sep + test)
+    return tuple(out)
+
+
+def _source_now(root: Path, mutant: "Mutant") -> Path | None:
+    """The file of ``root``'s src/ that holds the mutant's code once (the code may have moved since)."""
+    named = root / mutant.path
+    if named.is_file() and named.read_text().count(mutant.old) == 1:
+        return named
+    holders = [p for p in (root / "src").rglob("*.py") if p.read_text().count(mutant.old) == 1]
+    return holders[0] if len(holders) == 1 else None
 
 
 def _copy_tree(into: Path) -> Path:
@@ -181,20 +213,20 @@ def run_hand(names: list[str] | None, timeout: float) -> None:
             continue
         with tempfile.TemporaryDirectory(prefix="meshcorr-mut-") as folder:
             root = _copy_tree(Path(folder))
-            target = root / mutant.path
-            text = target.read_text()
-            if text.count(mutant.old) != 1:
+            target = _source_now(root, mutant)
+            if target is None:
                 print(f"| {mutant.name} | | not applicable: code changed | |", flush=True)
                 continue
-            control = _pytest(root, mutant.after, timeout)
+            text = target.read_text()
+            control = _pytest(root, _tests_now(mutant.after), timeout)
             target.write_text(text.replace(mutant.old, mutant.new))
-            after = _pytest(root, mutant.after, timeout)
+            after = _pytest(root, _tests_now(mutant.after), timeout)
             for test_file in _test_files(mutant.before):
                 old = subprocess.run(["git", "show", f"{BASE}:{test_file}"], cwd=ROOT, capture_output=True,
                                      text=True, check=True).stdout
                 (root / test_file).write_text(old)
             before = _pytest(root, mutant.before, timeout)
-        tests = " ".join(a.replace("tests/", "") for a in mutant.after)
+        tests = " ".join(a.replace("tests/", "") for a in _tests_now(mutant.after))
         note = "" if control == "survived" else f" (unmutated: {control}!)"
         print(f"| {mutant.name} | `{tests}` | {before} | {after}{note} |", flush=True)
 
@@ -297,7 +329,7 @@ def run_cosmic(modules: list[str], size: int, seed: int, timeout: float, keep: P
             config = root / "cosmic-ray.toml"
             config.write_text(
                 "[cosmic-ray]\n"
-                f'module-path = "src/meshcorr/{module}.py"\n'
+                f'module-path = "src/meshcorr/{MODULE_FILES[module]}"\n'
                 f"timeout = {timeout}\n"
                 "excluded-modules = []\n"
                 f"test-command = {command!r}\n"  # a TOML literal string

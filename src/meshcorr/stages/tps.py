@@ -11,7 +11,7 @@ out here because evaluating it is the inner loop of TPS-ICP, and
 ``cdist`` plus one matrix product evaluates it 2-3x faster than
 ``RBFInterpolator.__call__`` (1000-5000 points, 500 centres in 5-d: 2.3 vs
 6.9 ms and 15 vs 46 ms on one core) with the same values to ~1e-13
-(tests/test_icp.py compares the two).
+(tests/stages/test_icp.py compares the two).
 """
 
 from __future__ import annotations

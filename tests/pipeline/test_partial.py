@@ -17,7 +17,7 @@ from meshcorr.evaluation.metrics import geodesic_errors
 from meshcorr.core.sampling import farthest_point_sampling
 from meshcorr.core.mesh import as_mesh
 from meshcorr.core.orientation import orient_outward
-from meshcorr.pipeline.partial import match_part, matched_region
+from meshcorr.pipeline.partial import match_part
 from meshcorr.stages.part_checks import check_part_not_larger, geodesic_rows, partiality_suspicion
 
 #: Mean geodesic error / sqrt(target area) a partial map must stay under (measured: 0.016-0.03).
@@ -150,16 +150,6 @@ def test_boundary_loops_and_distance():
     assert distance[boundary.vertices].max() == 0.0
     top = np.argmin(cap.vertices[:, 2])  # the plane keeps x . n <= t: the lower half
     assert distance[top] == pytest.approx(np.pi / 2, rel=0.1)  # pole to equator along the sphere
-
-
-def test_matched_region_fills_the_gaps_of_a_map_and_keeps_the_outline():
-    V, F = ds.sphere(subdivisions=4)
-    ball = as_mesh((V, F))
-    upper = np.flatnonzero(V[:, 2] > 0.2)
-    images = upper[::3]  # a map that is not onto: a third of the upper cap
-    region = matched_region(ball, images, reach=0.05, closing=0.15)
-    assert region[upper].mean() > 0.97  # the gaps are filled
-    assert (V[region, 2] > 0.05).all()  # the outline did not grow by more than the reach
 
 
 def test_result_with_a_matched_region_saves_and_loads(plane_part, tmp_path):

@@ -50,7 +50,8 @@ from ..stages.reorder import Configuration, rank_configurations
 from ..stages.shells import shell_refine
 from .methods import applicable_options, run_method
 from ..stages.part_checks import check_part_not_larger, check_roles, geodesic_rows, partiality_suspicion
-from .partial import invert_part_map, match_part, part_region
+from ..stages.part_region import invert_part_map, part_region
+from .partial import match_part
 from .settings import REFINE_K, Settings, as_settings, shape_settings
 
 __all__ = ["match", "REFINE_K", "EXTREMITY_STARTS"]

@@ -170,7 +170,7 @@ def check_part_not_larger(part: Mesh, whole: Mesh, scale: float, *, role: str) -
     PartialityError
         When :math:`s^2 \\operatorname{area}(P) >` :data:`LARGER_TOLERANCE`
         :math:`\\operatorname{area}(W)`, :math:`s` the scale fitted to the map's
-        geodesic distances (:func:`fitted_distortion`). A map from a larger
+        geodesic distances (:func:`meshcorr.stages.part_distortion.fitted_distortion`). A map from a larger
         shape into a smaller one squashes distances, so this catches only
         clear cases; :func:`check_roles` catches the others before the work.
     """

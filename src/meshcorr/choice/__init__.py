@@ -11,5 +11,7 @@
 - :mod:`~meshcorr.choice.extremities`, :mod:`~meshcorr.choice.oriented_start`:
   where those starts come from;
 - :mod:`~meshcorr.choice.curvature`: the curvature term of the scores;
-- :mod:`~meshcorr.choice.repair`: the repair of a partly mirrored map.
+- :mod:`~meshcorr.choice.repair`: the repair of a partly mirrored map;
+- :mod:`~meshcorr.choice.part_tips`, :mod:`~meshcorr.choice.part_candidates`:
+  the partial mode's tips and candidates.
 """

@@ -344,7 +344,7 @@ def _match_partial(shapes, pairs: np.ndarray | None, settings: Settings, max_mem
     from 0.090 to 0.055; steps 1-7 alone, the start before, are right only
     when the cut leaves the shape's global structure). With
     ``partial="target"`` the target is mapped into the source and the map is
-    turned round (:func:`meshcorr.pipeline.partial.invert_part_map`): source vertices
+    turned round (:func:`meshcorr.stages.part_region.invert_part_map`): source vertices
     outside the matched region get -1.
     """
     partial, extremities, options = settings.partial, settings.extremities, _partial_options(settings, max_memory)

@@ -59,7 +59,7 @@ mode of :mod:`meshcorr.pipeline.partial`) keeps the target's units, takes
 :math:`\\lceil k / r \\rceil` functions on the target for :math:`k` on the part
 (the slanted-diagonal spectrum of a part: Rodolà et al., "Partial functional
 correspondence", CGF 2017), compares the spectral coordinates through the
-projection of :func:`meshcorr.pipeline.partial.partial_zoomout`, and starts at
+projection of :func:`meshcorr.stages.partial_zoomout.partial_zoomout`, and starts at
 :data:`PART_FIRST_SCALE` functions, the coarser shells of a part not
 resembling the whole's.
 
@@ -148,7 +148,7 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = RE
         step of :math:`k` functions on the part takes :math:`\\lceil k / r
         \\rceil` on the target (the slanted-diagonal spectrum of a part,
         r floored at :data:`PART_MIN_FRACTION`); the spectral coordinates
-        are compared as in :func:`meshcorr.pipeline.partial.partial_zoomout`, the
+        are compared as in :func:`meshcorr.stages.partial_zoomout.partial_zoomout`, the
         target's functions projected on the part's (the part's scaled by
         :math:`\\sqrt r`); the steps start at :data:`PART_FIRST_SCALE`.
     region : (n2,) bool, optional
@@ -291,7 +291,7 @@ class _Step:
         if self.part_fraction is None:
             C = orthogonal_fit(p1[s], p2[images])  # Phi1 C ~ Phi2[T]
             queries.append(SPECTRAL_WEIGHT * p1[rows] @ C)
-        else:  # a part: the whole's functions projected on the part's (meshcorr.pipeline.partial.partial_zoomout)
+        else:  # a part: the whole's functions projected on the part's (meshcorr.stages.partial_zoomout.partial_zoomout)
             U, _, Vt = np.linalg.svd((self.weights[:, None] * p1[s]).T @ (self.weights[:, None] * p2[images]),
                                      full_matrices=False)
             queries.append(SPECTRAL_WEIGHT * np.sqrt(self.part_fraction) * p1[rows])

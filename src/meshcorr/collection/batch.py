@@ -57,6 +57,7 @@ from typing import Callable, Sequence
 
 from ..errors import OutputError, ParameterError
 from ..evaluation.run_settings import check_run_settings
+from ..pipeline.settings import Settings
 from ..runtime.messages import one_line
 from .cluster import import_distributed, local_client
 from .options import cache_root, jsonable, split_options, task_key
@@ -173,6 +174,11 @@ class _Run:
     records: dict  # (source, target) -> record
     todo: list = field(default_factory=list)
 
+    @property
+    def matching(self) -> Settings:
+        """The :class:`~meshcorr.Settings` every preparation and match of the run uses (the keys use the dicts)."""
+        return Settings.from_options(**self.options, **self.settings)
+
     @classmethod
     def open(cls, out: Path, pairs: list, settings: dict, options: dict, ground_truth: str | None,
              hub: str | None) -> "_Run":
@@ -269,7 +275,8 @@ def _submit(dask_client, run: _Run, cache: str | None) -> tuple[dict, int]:
     Returns the futures of the pairs (future -> (source, target, map path)) and how many of them match.
     """
     wanted = {p for pair in (run.pairs if run.hub == "auto" else run.todo) for p in pair}
-    shapes = {path: dask_client.submit(prepare_task, path, run.settings, run.options, cache,
+    matching = run.matching
+    shapes = {path: dask_client.submit(prepare_task, path, matching, cache,
                                        key=f"prepare-{task_key(path, run.settings, run.options)}")
               for path in sorted(wanted)}
     if run.hub == "auto":
@@ -278,8 +285,8 @@ def _submit(dask_client, run: _Run, cache: str | None) -> tuple[dict, int]:
     def todo(how: str) -> list[tuple[str, str]]:
         return [(a, b) for a, b in run.todo if made_how(a, b, run.hub) == how]
 
-    matched = {(a, b): dask_client.submit(pair_task, shapes[a], shapes[b], a, b, run.map_path(a, b), run.settings,
-                                          run.options, run.ground_truth, key=run.key("match", a, b))
+    matched = {(a, b): dask_client.submit(pair_task, shapes[a], shapes[b], a, b, run.map_path(a, b), matching,
+                                          run.settings, run.options, run.ground_truth, key=run.key("match", a, b))
                for a, b in todo("match")}
     inverses = {(a, b): dask_client.submit(invert_task, shapes[a], shapes[b], run.made((b, a), matched), a, b,
                                            run.map_path(a, b), run.settings, run.ground_truth,

@@ -18,6 +18,7 @@ from ..core.holes import unfilled
 from ..errors import ParameterError
 from ..runtime.messages import one_line
 from ..runtime.threads import single_blas_thread
+from ..pipeline.settings import Settings
 from ..shapes.prepared import PreparedShape
 from ..spectral.modes import SCALABLE_ABOVE
 from .summary import DONE, new_record
@@ -25,21 +26,19 @@ from .summary import DONE, new_record
 __all__ = ["compose_task", "dna_task", "invert_task", "mean_error", "pair_task", "prepare_task"]
 
 
-def prepare_task(path: str, settings: dict, options: dict, cache_root: str | None):
+def prepare_task(path: str, matching: Settings, cache_root: str | None):
     """Worker: the :class:`PreparedShape` of one mesh file, or the one-line error that prevents it."""
     from ..pipeline.prepare import prepare
 
     try:
         with single_blas_thread():
-            return prepare(path, mode=options.get("mode", "auto"), max_memory=options.get("max_memory"),
-                           scalable_above=options.get("scalable_above", SCALABLE_ABOVE),
-                           cache=cache_root, **settings)
+            return prepare(path, matching, cache=cache_root)
     except Exception as exc:  # noqa: BLE001 - a failed shape fails its pairs, never the batch
         return one_line(exc)
 
 
-def pair_task(source, target, source_path: str, target_path: str, map_path: str, settings: dict,
-               options: dict, ground_truth: str | None) -> dict:
+def pair_task(source, target, source_path: str, target_path: str, map_path: str, matching: Settings,
+              settings: dict, options: dict, ground_truth: str | None) -> dict:
     """Worker: match two prepared shapes, write the map, return the pair's record."""
     from ..io import write_map
     from ..pipeline.run import match
@@ -51,7 +50,7 @@ def pair_task(source, target, source_path: str, target_path: str, map_path: str,
         with single_blas_thread():
             source, target = in_pair_mode(source, target, settings, options)
             start, cpu = time.perf_counter(), time.process_time()
-            result = match(source, target, **options, **settings)
+            result = match(source, target, matching)
             record["seconds"] = time.perf_counter() - start
             record["cpu_seconds"] = time.process_time() - cpu  # the worker's CPU time: load-independent
             write_map(map_path, result.map)

@@ -6,6 +6,8 @@ import logging
 import os
 import warnings
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import trimesh
@@ -62,6 +64,8 @@ end_header
 4 0 1 2 3
 4 1 4 5 2
 """
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 
 def shuffled_octahedron(seed=0):
@@ -298,6 +302,21 @@ def test_a_ply_of_points_declaring_faces_it_lacks_is_refused(tmp_path):
                     "0 0 0\n1 0 0\n0 1 0\n")
     with pytest.raises(MeshError, match="declares 1 faces but 0 were read"):
         read_mesh(path)
+
+
+@pytest.mark.parametrize("extra", [1, 20])
+def test_an_ascii_ply_with_more_face_lines_than_its_header_declares_is_refused(tmp_path, extra):
+    # trimesh reads the declared count and drops the rest: 20 faces lost, their holes closed, exit 0 (issue 31)
+    mesh = trimesh.load(EXAMPLES / "creature_rest.off", process=False)
+    text = trimesh.exchange.ply.export_ply(mesh, encoding="ascii").decode()
+    n = len(mesh.faces)
+    path = tmp_path / "undercounted.ply"
+    path.write_text(text.replace(f"element face {n}\n", f"element face {n - extra}\n"))
+    with pytest.raises(MeshError, match=rf"{len(mesh.vertices) + n - extra} records .* {len(mesh.vertices) + n} "
+                                        rf"lines of data: the extra {extra} would be ignored"):
+        read_mesh(path)
+    path.write_text(text + "\n\n")  # trailing blank lines are no records
+    assert read_mesh(path)[1].shape == (n, 3)
 
 
 def test_truncated_binary_ply(tmp_path):

@@ -64,6 +64,28 @@ def _declared_counts(data: bytes, fmt: str) -> tuple[int | None, int | None]:
     return None, None
 
 
+def _check_ascii_ply_records(data: bytes, label: str) -> None:
+    """Refuse an ASCII PLY whose data lines outnumber the records its header declares.
+
+    Every record of an ASCII PLY body is one line, and the header declares
+    how many each element has. trimesh reads the declared number and ignores
+    the rest, so a header that undercounts the faces would silently drop
+    them (the holes this leaves are then closed as if they were the mesh's
+    own). A binary PLY or an OFF refuses the same case.
+    """
+    end = data.find(b"end_header")
+    header = data[:end].decode("ascii", errors="replace")
+    if not re.search(r"^format\s+ascii\b", header, flags=re.MULTILINE):
+        return
+    declared = sum(int(n) for n in re.findall(r"^element\s+\S+\s+(\d+)", header, flags=re.MULTILINE))
+    body = data[data.find(b"\n", end) + 1:]
+    n_lines = sum(1 for line in body.splitlines() if line.strip())
+    if n_lines > declared:
+        raise MeshError(f"{label}: the header declares {declared} records (vertices, faces and other elements) "
+                        f"but the file has {n_lines} lines of data: the extra {n_lines - declared} would be "
+                        "ignored. Correct the counts in the header ('element face N') or re-export the mesh.")
+
+
 def _count_polygons(data: bytes, fmt: str, n_vertices: int | None) -> int | None:
     """Exact number of faces with more than 3 sides, where cheap to find (OBJ)."""
     if fmt == "OBJ":
@@ -294,6 +316,8 @@ def read_mesh(path, *, name: str | None = None) -> tuple[np.ndarray, np.ndarray]
     if fmt == "STL":
         return vertices, faces
 
+    if fmt == "PLY":
+        _check_ascii_ply_records(data, label)
     n_vertex_records, n_face_records = _declared_counts(data, fmt)
     if n_face_records is not None and len(faces) > n_face_records:
         n_polygons = _count_polygons(data, fmt, n_vertex_records)

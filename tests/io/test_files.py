@@ -2,6 +2,7 @@
 
 import os
 
+import numpy as np
 import pytest
 
 from meshcorr.errors import ParameterError
@@ -43,3 +44,20 @@ def test_atomic_write_replaces_file(tmp_path):
 def test_atomic_write_missing_directory(tmp_path):
     with pytest.raises(ParameterError, match="does not exist"):
         atomic_write(tmp_path / "no" / "out.txt", lambda file: file.write(b"x"))
+
+
+def test_a_valid_output_name_of_250_characters_is_written_and_leaves_no_temporary_file(tmp_path):
+    # the temporary name adds ".<12 hex>.tmp": it must be cut to fit, not refused (issue 31)
+    from meshcorr.io.files import check_outputs
+    from meshcorr.io.maps import write_map
+
+    path = tmp_path / ("m" * 246 + ".txt")
+    check_outputs({"the map": path})
+    write_map(path, np.arange(5))
+    assert path.read_text().split() == ["0", "1", "2", "3", "4"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [path.name]
+    from meshcorr.io.files import sibling
+
+    temp = sibling(path, "tmp")
+    assert len(temp.name.encode()) <= 255 and temp.parent == tmp_path and temp.name.startswith(".mmm")
+    assert sibling(tmp_path / "map.txt", "tmp").name.startswith(".map.txt.")  # short names are kept whole

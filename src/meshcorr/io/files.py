@@ -74,13 +74,30 @@ def check_outputs(outputs: dict, inputs: dict | None = None) -> None:
         if path.exists() and not os.access(path, os.W_OK):
             raise OutputError(f"Cannot write {what} {path}: the file exists and cannot be replaced "
                               "(read-only or immutable). Remove it or give another path.")
-        probe = folder / f".{path.name}.{secrets.token_hex(6)}.probe"
+        probe = sibling(path, "probe")
         try:
             os.close(os.open(probe, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600))
             os.unlink(probe)
         except OSError as exc:
             raise OutputError(f"Cannot write {what} {path}: no file can be created in {folder} "
                               f"({exc.strerror}). Give a path in a writable folder.") from exc
+
+
+def sibling(path: Path, kind: str) -> Path:
+    """A new hidden name beside ``path`` for a temporary file: ``.NAME.<12 hex>.<kind>``.
+
+    ``NAME`` is ``path``'s name, cut so that the whole name fits the
+    folder's limit (255 bytes on most file systems): a valid output name of
+    250 characters must not fail because of its temporary file's suffix.
+    """
+    try:
+        limit = os.pathconf(path.parent, "PC_NAME_MAX")
+    except (OSError, ValueError, AttributeError):
+        limit = 255
+    tail = f".{secrets.token_hex(6)}.{kind}"
+    room = max(1, limit - 1 - len(tail.encode()))
+    name = path.name.encode()[:room].decode(errors="ignore")
+    return path.parent / f".{name}{tail}"
 
 
 @contextmanager
@@ -146,7 +163,7 @@ def atomic_write(path, writer: Callable[[BinaryIO], object]) -> None:
     directory = path.parent
     if not directory.is_dir():
         raise OutputError(f"Cannot write {path}: directory {directory} does not exist.")
-    temp = directory / f".{path.name}.{secrets.token_hex(6)}.tmp"
+    temp = sibling(path, "tmp")
     try:
         # os.open applies the umask, so the final file gets ordinary permissions.
         fd = os.open(temp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_BINARY", 0), 0o666)

@@ -106,7 +106,7 @@ def main() -> int:
         return 0
 
     import meshcorr
-    from meshcorr.collection.batch import all_pairs, map_name
+    from meshcorr.collection.pairs import all_pairs, map_name
     from meshcorr.collection.consistency import choose_hub, cycle_errors, sample_triples, through_hub
     from meshcorr.io import read_map
 

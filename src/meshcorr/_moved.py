@@ -75,7 +75,8 @@ MOVED_NAMES: dict[str, dict[str, str]] = {
     "symmetry": {"Candidate": "choice.symmetry:ConfigurationCandidate"},
     "ground_truth": {"read_index_lines": "io.indices:read_index_lines", "index_fields": "io.indices:index_fields"},
     "collection": {"read_pairs": "collection.pairs:read_pair_list", "connect": "collection.cluster:connect",
-                   "FIELDS": "collection.summary:FIELDS"},
+                   "FIELDS": "collection.summary:FIELDS",
+                   **{name: f"collection.pairs:{name}" for name in ("all_pairs", "template_pairs", "map_name")}},
 }
 
 #: Public modules of ``meshcorr`` (its ``__all__``) -> their place; these short names stay, silently.
@@ -91,8 +92,8 @@ def new_name(old: str) -> str | None:
     if len(parts) < 2 or parts[0] != "meshcorr":
         return None
     short = ".".join(parts[1:])
-    place = MOVED.get(short) or (PUBLIC_MODULES.get(short) if PUBLIC_MODULES.get(short) != short else None)
-    return None if place is None else f"meshcorr.{place}"
+    place = MOVED.get(short) or PUBLIC_MODULES.get(short)
+    return None if place in (None, short) else f"meshcorr.{place}"  # a package in its own place needs no alias
 
 
 def _warn(old: str, new: str) -> None:
@@ -176,11 +177,13 @@ def forwarding(package: str, module: str):
     def __getattr__(name: str):
         if name.startswith("__"):
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
+        # A submodule not imported yet comes first: ``meshcorr.collection.batch`` is the module, not the
+        # function of that name inside it.
+        if importlib.util.find_spec(f"{package}.{name}") is not None:
+            return importlib.import_module(f"{package}.{name}")
         target = importlib.import_module(f"{package}.{module}")
         if hasattr(target, name):
             return getattr(target, name)
-        if importlib.util.find_spec(f"{package}.{name}") is not None:  # a submodule not imported yet
-            return importlib.import_module(f"{package}.{name}")
         try:  # a name of the flat-layout module that went elsewhere
             return moved_name(package.partition(".")[2], name)
         except AttributeError:

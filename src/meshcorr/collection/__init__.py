@@ -4,12 +4,11 @@
 function. Its steps: the pair lists (``pairs``), the options and keys
 (``options``), the Dask cluster (``cluster``), the workers' tasks (``tasks``)
 and the records and summary files (``summary``). The names of the former
-``meshcorr.collection`` module (``all_pairs``, ``map_name``, ...) are looked
-up in ``batch`` on first use.
+``meshcorr.collection`` module are looked up in ``batch`` on first use, or
+where they moved (``all_pairs``, ``map_name``: ``pairs``, with a warning).
 """
 
 
 from .._moved import forwarding
-from . import batch  # noqa: F401 - the module, never the function of the same name (that is meshcorr.batch)
 
 __getattr__ = forwarding(__name__, "batch")

@@ -61,7 +61,7 @@ from ..pipeline.settings import Settings
 from ..runtime.messages import one_line
 from .cluster import import_distributed, local_client
 from .options import cache_root, jsonable, split_options, task_key
-from .pairs import all_pairs, map_name, template_pairs  # noqa: F401 - the pair lists' home before collection.pairs
+from .pairs import all_pairs, map_name
 from .summary import DONE, in_order, made_how, new_record, read_summary, write_summary
 from .tasks import compose_task, dna_task, invert_task, pair_task, prepare_task
 
@@ -364,7 +364,7 @@ def _check_hub(hub: str, pairs: list[tuple[str, str]], options: dict) -> str:
     shapes = sorted({p for pair in pairs for p in pair})
     if set(pairs) != set(all_pairs(shapes)) or len(shapes) < 3:
         raise ParameterError("Mapping through a hub needs every ordered pair of at least three shapes "
-                             "(meshcorr.collection.batch.all_pairs, or meshcorr batch --all-pairs).")
+                             "(meshcorr.collection.pairs.all_pairs, or meshcorr batch --all-pairs).")
     if options.get("partial") is not None:
         raise ParameterError("A hub composes whole-shape maps: it does not go with partial (each shape "
                              "a part of every other); drop --hub or --partial.")

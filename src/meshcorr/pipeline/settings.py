@@ -42,6 +42,7 @@ from ..spectral.embedding import N_EIGENPAIRS
 from ..stages.anchors import ANCHOR_SCALES, ANCHOR_WEIGHT, N_ANCHORS
 from ..stages.icp import ANNEAL, ICP_ITERATIONS, N_CONTROL
 from ..stages.refine import REFINE_K
+from ..stages.landmarks import landmark_table
 from ..stages.part_checks import check_partial_options
 from ..stages.reorder import REORDER_MODES
 from .methods import METHOD_NAMES, reject_inapplicable
@@ -237,18 +238,18 @@ class Settings:
             (:func:`meshcorr.stages.part_checks.check_partial_options`).
         """
         check_choice("method", self.method, METHOD_NAMES)
-        _check_landmarks_table(self.landmarks)
+        has_pairs = landmark_table(self.landmarks) is not None  # checked here; against the meshes by the run
         changed = self.changed()
         check_partial_options(self.partial, self.method, changed)
         reject_inapplicable(self.method, changed)
         checked = {"random_state": check_seed(self.random_state)}
         checked.update((name, check_bool(name, getattr(self, name))) for name in _SWITCHES)
         if self.method == "spectral":
-            checked.update(self._spectral_values())
+            checked.update(self._spectral_values(has_pairs))
         for name, value in checked.items():
             object.__setattr__(self, name, value)
 
-    def _spectral_values(self) -> dict:
+    def _spectral_values(self, has_pairs: bool) -> dict:
         """The checked values of the spectral pipeline's settings (the baselines check their own)."""
         k = check_int("k", self.k, minimum=2, maximum=10)
         values = dict(k=k, geodesic=check_choice("geodesic", self.geodesic, GEODESIC_METHODS),
@@ -263,7 +264,7 @@ class Settings:
             parse_memory(self.max_memory)  # a size it cannot read raises here (the run resolves it)
         check_choice("symmetry", self.symmetry, SYMMETRY_MODES)
         check_choice("anchor_scale", self.anchor_scale, ANCHOR_SCALES)
-        if _has_pairs(self.landmarks) and self.symmetry != "auto":
+        if has_pairs and self.symmetry != "auto":
             raise ParameterError(f"Landmarks settle the left/right choice in the whole-map choice "
                                  f"(symmetry='auto'); symmetry={self.symmetry!r} (--symmetry {self.symmetry}) "
                                  "would set them aside. Keep symmetry='auto' (the default) with landmarks.")
@@ -310,9 +311,6 @@ class Settings:
         return out
 
 
-#: Laplace-Beltrami basis size of the ZoomOut refinement (:mod:`meshcorr.stages.refine`): the default of ``refine_k``.
-
-
 def as_settings(settings: Settings | None, overrides: dict) -> Settings:
     """``settings`` (default: ``Settings()``) with the keywords ``overrides`` replacing single fields, checked.
 
@@ -344,30 +342,6 @@ def shape_settings(settings: Settings | None = None, **overrides) -> dict:
     out = {name: getattr(settings, name) for name in SHAPE_SETTING_NAMES}
     out["fill_holes"] = fills(settings.fill_holes, partial=settings.partial, bijective=settings.bijective)
     return out
-
-
-def _has_pairs(landmarks) -> bool:
-    return landmarks is not None and np.asarray(landmarks).size > 0
-
-
-def _check_landmarks_table(landmarks) -> None:
-    """Refuse landmarks that are no table of (source vertex, target vertex) pairs of whole numbers.
-
-    An empty table is no landmarks. The indices are checked against the
-    meshes by the run (:func:`meshcorr.stages.landmarks.check_landmarks`).
-    """
-    if landmarks is None:
-        return
-    try:
-        pairs = np.asarray(landmarks)
-    except (TypeError, ValueError):
-        pairs = np.asarray(None)
-    if pairs.size == 0:
-        return
-    if pairs.ndim != 2 or pairs.shape[1] != 2 or pairs.dtype.kind not in "iuf":
-        raise ParameterError("The 'landmarks' parameter must be (source vertex, target vertex) integer "
-                             f"pairs, e.g. [(0, 12), (5, 40)]. Got an array of shape {pairs.shape} "
-                             f"and dtype {pairs.dtype} instead.")
 
 
 #: The per-shape settings and their defaults (:func:`shape_settings` of ``Settings()``).

@@ -63,6 +63,41 @@ def landmark_map(source_geodesics: RowFn, target_geodesics: RowFn, pairs: np.nda
     return mapping
 
 
+def landmark_table(landmarks) -> np.ndarray | None:
+    """User landmark pairs as a table of vertex indices, checked without the meshes.
+
+    Parameters
+    ----------
+    landmarks : None or sequence of (source_index, target_index)
+
+    Returns
+    -------
+    table : (L, 2) int64 or None
+        None when ``landmarks`` is None or empty.
+
+    Raises
+    ------
+    ParameterError
+        Not a table of pairs, or indices that are not whole numbers.
+    """
+    if landmarks is None:
+        return None
+    try:
+        table = np.asarray(landmarks)
+    except (TypeError, ValueError):
+        table = np.asarray(None)
+    if table.size == 0:
+        return None
+    if table.ndim != 2 or table.shape[1] != 2 or table.dtype.kind not in "iuf":
+        raise ParameterError("The 'landmarks' parameter must be (source vertex, target vertex) integer "
+                             f"pairs, e.g. [(0, 12), (5, 40)]. Got an array of shape {table.shape} "
+                             f"and dtype {table.dtype} instead.")
+    if table.dtype.kind == "f" and not (np.all(np.isfinite(table)) and np.all(table == np.round(table))):
+        raise ParameterError("Landmark indices must be whole numbers (0-based vertex indices); got "
+                             f"{table.reshape(-1)[:4].tolist()}...")
+    return table.astype(np.int64)
+
+
 def check_landmarks(landmarks, source: Mesh, target: Mesh) -> np.ndarray | None:
     """Validate user landmark pairs and put them in the meshes' local numbering.
 
@@ -81,29 +116,15 @@ def check_landmarks(landmarks, source: Mesh, target: Mesh) -> np.ndarray | None:
     Raises
     ------
     ParameterError
-        Not pairs of integers.
+        Not pairs of whole numbers (:func:`landmark_table`).
     LandmarkError
         An index out of range, a source vertex given two different targets,
         or a vertex that was removed with a dropped component (a pair given
         twice is kept once).
     """
-    if landmarks is None:
+    table = landmark_table(landmarks)
+    if table is None:
         return None
-    try:
-        table = np.asarray(landmarks)
-    except (TypeError, ValueError) as exc:
-        raise ParameterError("landmarks must be a sequence of (source_index, target_index) pairs.") from exc
-    if table.size == 0:
-        return None
-    if table.ndim != 2 or table.shape[1] != 2:
-        raise ParameterError("landmarks must be a sequence of (source_index, target_index) pairs; "
-                             f"got an array of shape {table.shape}.")
-    if table.dtype.kind not in "iu":
-        whole = table.dtype.kind == "f" and bool(np.all(np.isfinite(table))) and bool(np.all(table == np.round(table)))
-        if not whole:
-            raise ParameterError("Landmark indices must be whole numbers (0-based vertex indices); got "
-                                 f"{table.reshape(-1)[:4].tolist()}...")
-    table = table.astype(np.int64)
     for column, mesh, side in ((0, source, "source"), (1, target, "target")):
         bad = (table[:, column] < 0) | (table[:, column] >= mesh.n_input)  # not on a hole's cap
         if bad.any():

@@ -54,14 +54,19 @@ def _declared_counts(data: bytes, fmt: str) -> tuple[int | None, int | None]:
             len(re.findall(rb"^f[ \t]", data, flags=re.MULTILINE)),
         )
     if fmt == "PLY":
-        end = data.find(b"end_header")
-        if end < 0:
+        header = _ply_header(data)
+        if header is None:
             return None, None
-        header = data[:end].decode("ascii", errors="replace")
         n_v = re.search(r"^element\s+vertex\s+(\d+)", header, flags=re.MULTILINE)
         n_f = re.search(r"^element\s+face\s+(\d+)", header, flags=re.MULTILINE)
         return (int(n_v.group(1)) if n_v else None), (int(n_f.group(1)) if n_f else None)
     return None, None
+
+
+def _ply_header(data: bytes) -> str | None:
+    """The header of a PLY file (up to ``end_header``) as text, or None without one."""
+    end = data.find(b"end_header")
+    return None if end < 0 else data[:end].decode("ascii", errors="replace")
 
 
 def _check_ascii_ply_records(data: bytes, label: str) -> None:
@@ -73,12 +78,14 @@ def _check_ascii_ply_records(data: bytes, label: str) -> None:
     them (the holes this leaves are then closed as if they were the mesh's
     own). A binary PLY or an OFF refuses the same case.
     """
-    end = data.find(b"end_header")
-    header = data[:end].decode("ascii", errors="replace")
-    if not re.search(r"^format\s+ascii\b", header, flags=re.MULTILINE):
+    header = _ply_header(data)
+    if header is None or not re.search(r"^format\s+ascii\b", header, flags=re.MULTILINE):
         return
     declared = sum(int(n) for n in re.findall(r"^element\s+\S+\s+(\d+)", header, flags=re.MULTILINE))
-    body = data[data.find(b"\n", end) + 1:]
+    body = data[data.find(b"\n", data.find(b"end_header")) + 1:]
+    lines_at_most = body.count(b"\n") + (not body.endswith(b"\n"))
+    if lines_at_most <= declared:  # the common case, without splitting a large file into lines
+        return
     n_lines = sum(1 for line in body.splitlines() if line.strip())
     if n_lines > declared:
         raise MeshError(f"{label}: the header declares {declared} records (vertices, faces and other elements) "

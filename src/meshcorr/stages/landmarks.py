@@ -88,11 +88,13 @@ def landmark_table(landmarks) -> np.ndarray | None:
         table = np.asarray(None)
     if table.size == 0:
         return None
-    if table.ndim != 2 or table.shape[1] != 2 or table.dtype.kind not in "iuf":
+    if table.ndim != 2 or table.shape[1] != 2:
         raise ParameterError("The 'landmarks' parameter must be (source vertex, target vertex) integer "
                              f"pairs, e.g. [(0, 12), (5, 40)]. Got an array of shape {table.shape} "
                              f"and dtype {table.dtype} instead.")
-    if table.dtype.kind == "f" and not (np.all(np.isfinite(table)) and np.all(table == np.round(table))):
+    whole = table.dtype.kind in "iu" or (table.dtype.kind == "f" and bool(np.all(np.isfinite(table)))
+                                         and bool(np.all(table == np.round(table))))
+    if not whole:
         raise ParameterError("Landmark indices must be whole numbers (0-based vertex indices); got "
                              f"{table.reshape(-1)[:4].tolist()}...")
     return table.astype(np.int64)

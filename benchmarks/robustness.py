@@ -34,6 +34,7 @@ is absent. pyFM is optional (``pip install pyfmaps``).
 from __future__ import annotations
 
 import argparse
+import ast
 import contextlib
 import csv
 import itertools
@@ -57,7 +58,7 @@ from tosca_symmetry import pyfm_map  # the same pyFM settings as the other bench
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 FIELDS = ["set", "source", "target", "method", "mean_error", "forgiven_error", "flipped", "partial",
-          "seconds", "n_points"]
+          "seconds", "n_points", "margin"]
 N_TRUTH_LANDMARKS = 5
 
 
@@ -173,7 +174,7 @@ def score(pair: Pair, target, mapping: np.ndarray, cache: GeodesicCache) -> dict
     return score_points(target, mapping[pair.source_points], pair.target_points, pair.target_sym_points, cache)
 
 
-def run_pair(pair: Pair, methods: list[str]) -> list[dict]:
+def run_pair(pair: Pair, methods: list[str], options: dict | None = None) -> list[dict]:
     source = as_mesh(pair.source_path, name=pair.source_name)
     target = as_mesh(pair.target_path, name=pair.target_name)
     landmarks = truth_landmarks(pair, source) if pair.set.endswith("+5") else None
@@ -182,15 +183,18 @@ def run_pair(pair: Pair, methods: list[str]) -> list[dict]:
     for method in methods:
         start = time.perf_counter()
         if method.startswith("meshcorr"):  # "meshcorr-oriented": with oriented_starts=True
-            extra = {} if landmarks is None else {"landmarks": landmarks}
+            extra = dict(options or {}, **({} if landmarks is None else {"landmarks": landmarks}))
             if method == "meshcorr-oriented":
                 extra["oriented_starts"] = True
-            mapping = meshcorr.match(source, target, **extra).map
+            result = meshcorr.match(source, target, **extra)
+            mapping, confidence = result.map, result.confidence or {}
+            margin = confidence.get("margin")
         else:
-            mapping = pyfm_map(source, target, landmarks)
+            mapping, margin = pyfm_map(source, target, landmarks), None
         seconds = time.perf_counter() - start
         rows.append(dict(set=pair.set, source=pair.source_name, target=pair.target_name, method=method,
-                         seconds=round(seconds, 3), **score(pair, target, mapping, cache)))
+                         seconds=round(seconds, 3), margin="" if margin is None else margin,
+                         **score(pair, target, mapping, cache)))
     return rows
 
 
@@ -248,7 +252,12 @@ def main(argv=None) -> int:
                              "0: all")
     parser.add_argument("--out", type=Path, default=Path("benchmarks/cache/robustness.csv"))
     parser.add_argument("--report", type=Path, default=None, help="write the Markdown table here")
+    parser.add_argument("--option", action="append", default=[], metavar="NAME=VALUE",
+                        help="a setting of meshcorr.match for this run, e.g. coarse_vertices=0 (repeatable)")
+    parser.add_argument("--half", choices=("a", "b"), default=None,
+                        help="only the pairs of one fixed half of each set (alternate pairs: a = 1st, 3rd, ...)")
     args = parser.parse_args(argv)
+    options = {name: ast.literal_eval(value) for name, value in (o.split("=", 1) for o in args.option)}
     if not DATA.is_dir():
         print(f"robustness: {DATA} is absent; this benchmark needs ../shared/data. Skipping.", file=sys.stderr)
         return 0
@@ -259,12 +268,14 @@ def main(argv=None) -> int:
     with appending(args.out, FIELDS) as (handle, writer):
         for name in chosen:
             subset = _spread(sets[name], args.pyfm_pairs)
-            for pair in sets[name]:
+            for index, pair in enumerate(sets[name]):
+                if args.half is not None and index % 2 != "ab".index(args.half):
+                    continue
                 todo = [m for m in args.methods if (name, pair.source_name, pair.target_name, m) not in done
                         and (m != "pyfm" or any(pair is q for q in subset))]
                 if not todo:
                     continue
-                for row in run_pair(pair, todo):
+                for row in run_pair(pair, todo, options):
                     writer.writerow(row)
                     handle.flush()
                     rows.append(row)

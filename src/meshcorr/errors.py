@@ -64,5 +64,9 @@ class MemoryLimitError(ParameterError):
     """The chosen mode would need more memory than it is allowed (see ``max_memory``)."""
 
 
+class UnsureChoiceWarning(MeshWarning):
+    """The whole-map choice found a map of another global configuration almost as good (``result.confidence``)."""
+
+
 class PartialShapeWarning(MeshWarning):
     """One shape looks like a part of the other, but ``partial`` was not given (see :mod:`meshcorr.pipeline.partial`)."""

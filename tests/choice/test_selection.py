@@ -266,3 +266,24 @@ def test_oriented_starts_add_their_candidates_and_keep_the_permutation(tmp_path,
     assert main(["match", *paths, "--oriented-starts", "--json", "-q"]) == 0
     summary = json.loads(capsys.readouterr().out)
     assert any(c["origin"].endswith("-oriented") for c in summary["map_candidates"])
+
+
+def test_on_coarse_copies_the_curvature_is_measured_on_the_full_meshes():
+    """score_candidates(fine=...): the curvature of each map lifted to the full meshes, not of the copies'."""
+    from meshcorr.choice.curvature import curvature_disagreement
+    from meshcorr.choice.selection import MapCandidate, score_orientation
+    from meshcorr.core.coarse import coarse_copy
+    from meshcorr.core.mesh import as_mesh
+    from meshcorr import datasets as ds
+
+    shape = ds.creature(resolution=3)
+    mesh = as_mesh((shape.vertices, shape.faces))
+    copy = coarse_copy(mesh, 400)
+    identity = np.arange(copy.mesh.n_vertices)
+    on_copies, lifted = MapCandidate("spectral", identity), MapCandidate("spectral", identity)
+    score_orientation(on_copies, copy.mesh, copy.mesh)
+    score_orientation(lifted, copy.mesh, copy.mesh, fine=(copy, copy))
+    expected = curvature_disagreement(mesh, mesh, copy.lift_map(identity, copy))
+    assert lifted.curvature == pytest.approx(expected)
+    assert on_copies.curvature == pytest.approx(0.0, abs=1e-12) and lifted.curvature > 0.01
+    assert lifted.orientation == pytest.approx(on_copies.orientation)  # the orientation stays the copies'

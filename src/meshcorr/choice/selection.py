@@ -129,7 +129,7 @@ class MapCandidate:
 
 def score_candidates(candidates: list[MapCandidate], source, target, source_geodesics, target_geodesics, *,
                      reliable: bool, landmarks: np.ndarray | None = None,
-                     random_state: int | None = 0) -> None:
+                     random_state: int | None = 0, fine=None) -> None:
     """Fill in each candidate's energies (module docstring), in place.
 
     Parameters
@@ -145,6 +145,12 @@ def score_candidates(candidates: list[MapCandidate], source, target, source_geod
         User landmark pairs, local numbering.
     random_state : int or None
         Seed of the distortion's source vertices and the orientation sample.
+    fine : (CoarseCopy, CoarseCopy), optional
+        When ``source`` and ``target`` are coarse copies
+        (:mod:`meshcorr.core.coarse`): the curvature disagreement is measured
+        on the full meshes, each map lifted to them (a copy of a few thousand
+        vertices blurs the nose, the toes and the knee caps that tell front
+        from back); the other energies on the copies.
     """
     sources = distortion_sources(source.n_vertices, random_state)
     rows: dict = {}
@@ -152,7 +158,7 @@ def score_candidates(candidates: list[MapCandidate], source, target, source_geod
         mapping = candidate.mapping
         candidate.distortion = metric_distortion(source_geodesics, target_geodesics, mapping, sources, rows)
         if reliable:
-            score_orientation(candidate, source, target, random_state=random_state)
+            score_orientation(candidate, source, target, random_state=random_state, fine=fine)
         if landmarks is not None:
             errors = np.array([target_geodesics(int(b))[mapping[a]] for a, b in landmarks])
             candidate.landmark_error = float(errors.mean())
@@ -178,7 +184,8 @@ def distortion_sources(n_vertices: int, random_state: int | None = 0) -> np.ndar
     return rng.choice(n_vertices, size=min(N_DISTORTION_SOURCES, n_vertices), replace=False)
 
 
-def score_orientation(candidate: MapCandidate, source, target, *, random_state: int | None = 0) -> None:
+def score_orientation(candidate: MapCandidate, source, target, *, random_state: int | None = 0,
+                      fine=None) -> None:
     """Fill in a candidate's orientation, curvature disagreement and worst regional orientation, in place.
 
     Parameters
@@ -192,7 +199,11 @@ def score_orientation(candidate: MapCandidate, source, target, *, random_state: 
     mapping = candidate.mapping
     orientation, regional = orientation_scores(source, target, mapping, random_state=random_state)
     candidate.orientation = orientation
-    candidate.curvature = curvature_disagreement(source, target, mapping, random_state=random_state)
+    if fine is None:
+        candidate.curvature = curvature_disagreement(source, target, mapping, random_state=random_state)
+    else:  # on the full meshes (score_candidates)
+        candidate.curvature = curvature_disagreement(fine[0].fine, fine[1].fine, fine[0].lift_map(mapping, fine[1]),
+                                                     random_state=random_state)
     candidate.regional_orientation = float(regional.min())
 
 
@@ -215,18 +226,28 @@ def choose_map(candidates: list[MapCandidate], *, reliable: bool
         the other side of 0.5 (with an unreliable orientation: the least
         distorted other candidate); None if there is none.
     """
+    chosen = min(eligible(candidates, reliable=reliable), key=lambda c: energy(c, reliable))
+    rest = [c for c in candidates if c is not chosen]
+    if reliable:
+        rest = [c for c in rest if (c.orientation >= 0.5) != (chosen.orientation >= 0.5)]
+    alternative = min(rest, key=lambda c: energy(c, reliable)) if rest else None
+    return chosen, alternative
+
+
+def eligible(candidates: list[MapCandidate], *, reliable: bool) -> list[MapCandidate]:
+    """The candidates :func:`choose_map` ranks by :func:`energy`.
+
+    Those that keep the most landmarks (all of them without landmarks) and,
+    with a reliable orientation, whose orientation score is at least
+    :data:`ORIENTATION_MIN` (all of those kept so far if none is).
+    """
     pool = list(candidates)
     if all(np.isfinite(c.landmarks_kept) for c in pool):
         best = max(c.landmarks_kept for c in pool)
         pool = [c for c in pool if c.landmarks_kept == best]
     if reliable:
         pool = [c for c in pool if c.orientation >= ORIENTATION_MIN] or pool
-    chosen = min(pool, key=lambda c: energy(c, reliable))
-    rest = [c for c in candidates if c is not chosen]
-    if reliable:
-        rest = [c for c in rest if (c.orientation >= 0.5) != (chosen.orientation >= 0.5)]
-    alternative = min(rest, key=lambda c: energy(c, reliable)) if rest else None
-    return chosen, alternative
+    return pool
 
 
 def candidate_summaries(candidates: list[MapCandidate], chosen: MapCandidate,
@@ -293,13 +314,14 @@ def shell_candidates(candidates: list[MapCandidate], source, target, *, k: int,
     """
     chosen = [c for c in candidates if c.orientation >= 0.5]
 
-    def shelled(candidate: MapCandidate) -> np.ndarray:
-        held = candidate.origin == "landmarks"
-        return shell_refine(source, target, candidate.mapping, k=k, landmarks=landmarks if held else None,
-                            descriptors=descriptors if held else None,
-                            orientation=candidate.orientation, random_state=random_state)
+    def shelled(candidate: MapCandidate) -> tuple[np.ndarray, dict]:
+        held, energy = candidate.origin == "landmarks", {}
+        mapping = shell_refine(source, target, candidate.mapping, k=k, landmarks=landmarks if held else None,
+                               descriptors=descriptors if held else None,
+                               orientation=candidate.orientation, random_state=random_state, energy=energy)
+        return mapping, energy
 
-    for candidate, mapping in zip(chosen, parallel_map(shelled, chosen)):  # one thread per core
+    for candidate, (mapping, energy) in zip(chosen, parallel_map(shelled, chosen)):  # one thread per core
         candidate.mapping = mapping
-        candidate.extra.update(shells=1.0, zoomout_orientation=candidate.orientation)
+        candidate.extra.update(shells=1.0, zoomout_orientation=candidate.orientation, **energy)
     return chosen

@@ -24,7 +24,10 @@ from ..stages.refine import refine_map
 from .extremities import match_extremities, spectrum_extremities
 from .oriented_start import fit_oriented_map
 from .repair import repair_candidates
-from .selection import MapCandidate, candidate_summaries, choose_map, score_candidates, shell_candidates
+from .confidence import Confidence, choice_confidence
+from .selection import energy as map_energy
+from .selection import (MapCandidate, candidate_summaries, choose_map, distortion_sources, eligible, score_candidates,
+                        shell_candidates)
 
 __all__ = ["EXTREMITY_STARTS", "WholeMapChoice", "whole_map_choice"]
 
@@ -45,13 +48,14 @@ class WholeMapChoice(NamedTuple):
     spectral_kept: bool = True  # the chosen map is the spectral map unchanged (no other candidate, no pin)
     shelled: bool = False  # the candidates were judged after meshcorr.stages.shells: the chosen map is final
     orientation: float | None = None  # the chosen map's orientation score, when it is that exact map's
+    confidence: Confidence | None = None  # the margin to the best rival map (meshcorr.choice.confidence)
 
 
 def whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, spectral_other,
                       pairs: np.ndarray | None, *, extremities: bool, refine: bool, refine_k: int,
                       bijective: bool, reliable: bool, shells: bool, timer: StageTimer,
                       described: tuple[np.ndarray, np.ndarray] | None = None,
-                      tip_starts: tuple[str, ...] = EXTREMITY_STARTS, random_state) -> WholeMapChoice:
+                      tip_starts: tuple[str, ...] = EXTREMITY_STARTS, random_state, fine=None) -> WholeMapChoice:
     """Candidate maps from extremities and landmarks, scored with the spectral map; the winner.
 
     With ``shells`` on and a reliable orientation, the choice is made between
@@ -62,6 +66,10 @@ def whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, sp
     map whose ZoomOut vertices are scattered locally scores as low as a
     mirrored one before the shells (TOSCA michael11 -> michael16: 0.59
     against 0.2-0.58) and above 0.9 after them.
+
+    ``fine``: when ``src`` and ``tgt`` are coarse copies, the two
+    :class:`~meshcorr.core.coarse.CoarseCopy` (the curvature disagreement is
+    measured on the full meshes: :func:`meshcorr.choice.selection.score_candidates`).
     """
     with timer.stage("whole-map"):
         g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
@@ -93,10 +101,11 @@ def whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, sp
         # Independent refinements, mostly BLAS and LAPACK: one thread per core (same maps as a loop).
         for (origin, _, extra), mapping in zip(starts, parallel_map(refined, starts)):
             candidates.append(MapCandidate(origin, mapping, extra=extra))
-        score_candidates(candidates, src, tgt, g1, g2, reliable=reliable, landmarks=pairs, random_state=random_state)
+        score_candidates(candidates, src, tgt, g1, g2, reliable=reliable, landmarks=pairs, random_state=random_state,
+                         fine=fine)
     if shells and reliable:  # judge the maps as they will be returned (module docstrings of these steps)
         with timer.stage("shells"):
-            scored = dict(reliable=reliable, landmarks=pairs, random_state=random_state)
+            scored = dict(reliable=reliable, landmarks=pairs, random_state=random_state, fine=fine)
             repaired = repair_candidates(candidates, src, tgt, k=refine_k, random_state=random_state)
             score_candidates(repaired, src, tgt, g1, g2, **scored)
             candidates += repaired
@@ -104,6 +113,9 @@ def whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, sp
                                      random_state=random_state)
             score_candidates(final, src, tgt, g1, g2, **scored)
     chosen, alternative = choose_map(candidates, reliable=reliable)
+    pool = eligible(candidates, reliable=reliable)  # the rivals: maps the rules would have let win
+    confidence = choice_confidence(pool, chosen, {id(c): map_energy(c, reliable) for c in pool}, g1, g2,
+                                   distortion_sources(src.n_vertices, random_state))
     mapping = chosen.mapping.copy()
     if pairs is not None:
         mapping[pairs[:, 0]] = pairs[:, 1]
@@ -111,4 +123,5 @@ def whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, sp
     summaries = candidate_summaries(candidates, chosen, alternative, reliable=reliable)
     shelled = bool(chosen.extra.get("shells"))
     return WholeMapChoice(mapping, other, summaries, chosen.origin == "spectral" and pairs is None and not shelled,
-                   shelled, chosen.orientation if pairs is None and np.isfinite(chosen.orientation) else None)
+                          shelled, chosen.orientation if pairs is None and np.isfinite(chosen.orientation) else None,
+                          confidence)

@@ -142,6 +142,11 @@ def add_parser(sub) -> None:
                    help="scale of the anchor term: the embedding's length scale, or geodesics divided "
                         "by the largest one as in the paper (default: embedding)")
     s = p.add_argument_group("scale")
+    s.add_argument("--coarse-vertices", type=int, default=DEFAULTS.coarse_vertices, metavar="N",
+                   help="make the global choice on coarse copies of about N vertices (meshes with more are "
+                        "decimated) and refine only the chosen map on the full meshes: the choice then costs "
+                        "the same at any size. 0 runs every step on the full meshes (slower above a few "
+                        f"thousand vertices; default: {DEFAULTS.coarse_vertices})")
     s.add_argument("--mode", choices=MODES, default=DEFAULTS.mode,
                    help="dense: all-pairs geodesics and exact eigenpairs (n x n memory, the reference); "
                         f"scalable: landmark geodesics and the Nystrom extension; auto: dense up to "

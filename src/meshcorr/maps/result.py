@@ -132,6 +132,16 @@ class Correspondence:
         (its orientation before them). Empty when that stage did not run
         (``symmetry="cost"`` or ``"mirror"``, ``extremities=False`` without
         landmarks).
+    confidence : dict or None
+        How sure the whole-map choice is (:mod:`meshcorr.choice.confidence`):
+        ``margin``, the decades of energy between the best map of a
+        different global configuration (the rival: a mirror, a front/back
+        turn, limbs exchanged) and the chosen map (None without a rival);
+        ``low``, whether it is below the unsure threshold; ``rival``, that
+        map's origin; ``suggested_landmarks``, a few ``{"source", "chosen",
+        "rival"}`` vertices (input numbering) where the two maps disagree
+        most: a landmark on each settles the choice. None when no whole-map
+        choice was made.
     partial : {None, "source", "target"}
         Which shape was declared a part of the other (:mod:`meshcorr.pipeline.partial`);
         None for a whole-to-whole map.
@@ -170,6 +180,7 @@ class Correspondence:
     orientation_reliable: bool | None = None
     refine_history: list = field(default_factory=list)
     map_candidates: list[dict] = field(default_factory=list)
+    confidence: dict | None = None
     partial: str | None = None
     matched_region: np.ndarray | None = None
     matched_area_fraction: float | None = None
@@ -202,6 +213,7 @@ class Correspondence:
             "n_target_hit": int(len(np.unique(self.map[mapped]))),
             "configuration": self.configuration.to_dict() if self.configuration else None,
             "map_candidates": self.map_candidates,
+            "confidence": self.confidence,
             "runner_up": self.runner_up.to_dict() if self.runner_up else None,
             "n_configurations": len(self.alternatives),
             "eigenvalues": {k: [float(x) for x in v] for k, v in self.eigenvalues.items()},
@@ -237,6 +249,8 @@ class Correspondence:
                 "partial": self.partial,
                 "matched_area_fraction": (None if self.matched_area_fraction is None
                                           else round(float(self.matched_area_fraction), 3)),
+                "confidence": (None if not self.confidence or self.confidence.get("margin") is None
+                               else round(float(self.confidence["margin"]), 2)),
                 "seconds": round(float(sum(self.timings.values())), 2), "version": self.version}
 
     def __repr__(self) -> str:

@@ -31,11 +31,13 @@ from typing import NamedTuple
 import numpy as np
 
 from ..core.orientation import mesh_orientation
+from ..choice.confidence import unsure_message
 from ..choice.symmetry import ConfigurationCandidate, choose, score_configurations
 from ..choice.whole_map import EXTREMITY_STARTS, WholeMapChoice, whole_map_choice
+from ..core.coarse import CoarseCopy, coarse_copy, needs_copy
 from ..core.holes import restrict, unfilled
 from ..core.mesh import Mesh, MeshLike
-from ..errors import MeshWarning, ParameterError, PartialShapeWarning
+from ..errors import MeshWarning, ParameterError, PartialShapeWarning, UnsureChoiceWarning
 from ..maps.result import Correspondence
 from ..runtime.progress import as_progress
 from ..runtime.timing import StageProgress, StageTimer
@@ -105,7 +107,10 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, se
     shapes, pairs = _load(source, target, settings, timer)
     if settings.partial is not None:  # a part against the whole: meshcorr.pipeline.partial
         return _match_partial(shapes, pairs, settings, max_memory, timer)
-    return _match_whole(shapes, pairs, settings, max_memory, timer)
+    result = _match_whole(shapes, pairs, settings, max_memory, timer)
+    if result.confidence is not None and result.confidence["low"]:  # meshcorr.choice.confidence
+        warnings.warn(unsure_message(result.confidence), UnsureChoiceWarning, stacklevel=2)
+    return result
 
 
 def _match_baseline(source, target, settings: Settings, progress) -> Correspondence:
@@ -148,9 +153,12 @@ class _Aligned(NamedTuple):
 
 
 def _match_whole(shapes, pairs: np.ndarray | None, settings: Settings, max_memory: int | None,
-                 timer: StageTimer) -> Correspondence:
+                 timer: StageTimer, fine: tuple | None = None) -> Correspondence:
     """Two whole shapes, the paper's steps in order, then the whole-map choice and the refinements."""
     src, tgt = as_meshes(*shapes)
+    copies = _coarse_copies(src, tgt, settings, timer)
+    if copies is not None:  # steps 1-6 and the choice on coarse copies, the winner refined on the meshes
+        return _match_coarse_to_fine(src, tgt, copies, pairs, settings, max_memory, timer)
     mode = select_mode(settings.mode, src.n_vertices, tgt.n_vertices, max_memory=max_memory,
                        scalable_above=settings.scalable_above, bijective=settings.bijective)
     # The refinement's Laplace-Beltrami bases depend on the meshes only: a worker
@@ -171,11 +179,124 @@ def _match_whole(shapes, pairs: np.ndarray | None, settings: Settings, max_memor
     # The landmarks' geodesic distances, a further coordinate of the shells' product space.
     described = None if pairs is None or not shell_stage else tuple(
         landmark_descriptors(spectrum.geodesics_from, ends) for spectrum, ends in zip(spectra, pairs.T))
-    choice = _choose_map(src, tgt, aligned, pairs, settings, shell_stage, described, timer)
+    choice = _choose_map(src, tgt, aligned, pairs, settings, shell_stage, described, timer, fine)
     local_map, other_map = _final_maps(src, tgt, choice, pairs, settings, shell_stage, described, timer)
     spectral_kept = choice.spectral_kept and not shell_stage
-    return _result(src, tgt, aligned, local_map, other_map, choice.summaries, spectral_kept, pairs,
-                   settings, dict(mode=mode, max_memory=max_memory, shells=shell_stage), timer)
+    result = _result(src, tgt, aligned, local_map, other_map, choice.summaries, spectral_kept, pairs,
+                     settings, dict(mode=mode, max_memory=max_memory, shells=shell_stage), timer)
+    if choice.confidence is not None:  # in the input numbering
+        result.confidence = _confidence_report(choice.confidence, src.kept, tgt.kept)
+    return result
+
+
+def _confidence_report(confidence, source_numbers: np.ndarray, target_numbers: np.ndarray) -> dict:
+    """``result.confidence``: :meth:`Confidence.to_dict` with the suggested vertices renumbered."""
+    report = confidence.to_dict()
+    for row in report["suggested_landmarks"]:
+        row.update(source=int(source_numbers[row["source"]]), chosen=int(target_numbers[row["chosen"]]),
+                   rival=int(target_numbers[row["rival"]]))
+    return report
+
+
+def _coarse_copies(src: Mesh, tgt: Mesh, settings: Settings, timer: StageTimer) -> tuple | None:
+    """The two meshes' coarse copies (:mod:`meshcorr.core.coarse`), or None where the pair runs on the meshes.
+
+    Not for point clouds, an unrefined map (the paper's map at every
+    vertex), one-to-one maps and a ``symmetry`` other than "auto" (no
+    choice to make), nor when both meshes are small already.
+    """
+    size = settings.coarse_vertices
+    if (not settings.refine or settings.bijective or settings.symmetry != "auto" or src.is_cloud or tgt.is_cloud
+            or not needs_copy(max(src.n_vertices, tgt.n_vertices), size)):
+        return None
+    with timer.stage("coarse"):
+        copies = coarse_copy(src, size), coarse_copy(tgt, size)
+    return None if None in copies else copies
+
+
+def _match_coarse_to_fine(src: Mesh, tgt: Mesh, copies: tuple[CoarseCopy, CoarseCopy], pairs: np.ndarray | None,
+                          settings: Settings, max_memory: int | None, timer: StageTimer) -> Correspondence:
+    """The whole pipeline on the coarse copies, its map lifted to every vertex and refined there.
+
+    The refinement's Laplace-Beltrami bases of the meshes are computed in
+    a worker thread meanwhile. Landmarks go to the coarse copies as their
+    nearest coarse vertices and are held exactly on the meshes.
+    """
+    coarse_pairs = None if pairs is None else _coarse_landmarks(pairs, copies)
+    with prefetch_bases(src, tgt, settings.refine_k, random_state=settings.random_state) as bases:
+        coarse = _match_whole((copies[0].mesh, copies[1].mesh), coarse_pairs, settings.replace(coarse_vertices=0),
+                              max_memory, timer, fine=copies)
+        with timer.stage("refine"):
+            bases.wait()
+    with timer.stage("refine"):
+        lifted = copies[0].lift_map(coarse.map, copies[1])
+        mapping, history = refine_map(src, tgt, lifted, k=settings.refine_k, random_state=settings.random_state,
+                                      landmarks=pairs)
+    if settings.shells:
+        with timer.stage("shells"):
+            described = None if pairs is None else tuple(
+                landmark_descriptors(geodesic_rows(mesh, settings.geodesic), ends) for mesh, ends in
+                zip((src, tgt), pairs.T))
+            mapping = shell_refine(src, tgt, mapping, k=settings.refine_k, landmarks=pairs, descriptors=described,
+                                   random_state=settings.random_state)
+    if pairs is not None:
+        mapping[pairs[:, 0]] = pairs[:, 1]
+    return _lifted_result(src, tgt, copies, coarse, mapping, history, settings, timer, bases.seconds)
+
+
+def _coarse_landmarks(pairs: np.ndarray, copies: tuple[CoarseCopy, CoarseCopy]) -> np.ndarray | None:
+    """Landmark pairs on the coarse copies: each end's nearest coarse vertex, the first pair of a coarse vertex kept."""
+    coarse = np.stack([copies[0].child[pairs[:, 0]], copies[1].child[pairs[:, 1]]], axis=1)
+    _, first = np.unique(coarse[:, 0], return_index=True)
+    coarse = coarse[np.sort(first)]
+    _, first = np.unique(coarse[:, 1], return_index=True)
+    return coarse[np.sort(first)]
+
+
+def _lifted_result(src: Mesh, tgt: Mesh, copies: tuple[CoarseCopy, CoarseCopy], coarse: Correspondence,
+                   mapping: np.ndarray, history: list, settings: Settings, timer: StageTimer,
+                   bases_seconds: float | None) -> Correspondence:
+    """The Correspondence of a coarse-to-fine run: the refined map; per-vertex data of the copies at each
+    vertex's nearest coarse vertex, the coarse anchors and alternative at their fine parents."""
+    (one, two), lift = copies, (lambda values, copy: None if values is None else values[copy.child])
+    alternative = None
+    if coarse.alternative_map is not None:
+        alternative = np.full(src.n_original, -1, dtype=np.int64)
+        alternative[src.kept] = tgt.kept[one.lift_map(coarse.alternative_map, two)]
+    full_map = np.full(src.n_original, -1, dtype=np.int64)
+    full_map[src.kept] = tgt.kept[mapping]
+    anchors = None if coarse.anchors is None else np.stack(
+        [src.kept[one.parent[coarse.anchors[:, 0]]], tgt.kept[two.parent[coarse.anchors[:, 1]]]], axis=1)
+    params = dict(coarse.params, coarse_vertices=settings.coarse_vertices,
+                  coarse_sizes=[one.mesh.n_vertices, two.mesh.n_vertices],
+                  landmarks=None if settings.landmarks is None else np.asarray(settings.landmarks).tolist())
+    params.pop("meshcorr_version", None)
+    background = dict(coarse.background_timings)
+    if bases_seconds is not None:
+        background["refine_bases"] = background.get("refine_bases", 0.0) + bases_seconds
+    return restrict(Correspondence(  # without the holes' caps (meshcorr.core.holes)
+        map=full_map, source=src, target=tgt, source_vertices=src.kept.copy(), target_vertices=tgt.kept.copy(),
+        source_embedding=lift(coarse.source_embedding, one), target_embedding=lift(coarse.target_embedding, two),
+        aligned_target_embedding=lift(coarse.aligned_target_embedding, two), eigenvalues=coarse.eigenvalues,
+        configuration=coarse.configuration, alternatives=coarse.alternatives, anchors=anchors,
+        icp_history=coarse.icp_history, icp_converged=coarse.icp_converged, timings=timer.timings,
+        background_timings=background, params=params, candidates=coarse.candidates, alternative_map=alternative,
+        orientation_reliable=coarse.orientation_reliable, refine_history=history,
+        map_candidates=coarse.map_candidates, confidence=_lifted_confidence(coarse.confidence, copies, src, tgt)),
+        src, tgt)
+
+
+def _lifted_confidence(confidence: dict | None, copies: tuple[CoarseCopy, CoarseCopy], src: Mesh,
+                       tgt: Mesh) -> dict | None:
+    """The coarse run's ``confidence`` with its suggested vertices at their fine parents (input numbering)."""
+    if confidence is None:
+        return None
+    report = dict(confidence, suggested_landmarks=[dict(row) for row in confidence["suggested_landmarks"]])
+    for row in report["suggested_landmarks"]:
+        row.update(source=int(src.kept[copies[0].parent[row["source"]]]),
+                   chosen=int(tgt.kept[copies[1].parent[row["chosen"]]]),
+                   rival=int(tgt.kept[copies[1].parent[row["rival"]]]))
+    return report
 
 
 def _spectra(shapes, settings: Settings, mode: str, timer: StageTimer) -> list:
@@ -260,7 +381,7 @@ def _final_maps(src: Mesh, tgt: Mesh, choice: WholeMapChoice, pairs: np.ndarray 
 
 
 def _choose_map(src: Mesh, tgt: Mesh, aligned: _Aligned, pairs: np.ndarray | None, settings: Settings,
-                shell_stage: bool, described, timer: StageTimer) -> WholeMapChoice:
+                shell_stage: bool, described, timer: StageTimer, fine: tuple | None) -> WholeMapChoice:
     """The whole-map choice (stages "whole-map" and "shells"), or the spectral map when it does not run."""
     chosen, other = aligned.chosen, aligned.other
     choice = WholeMapChoice(chosen.mapping, None if other is None else other.mapping, [])
@@ -270,7 +391,7 @@ def _choose_map(src: Mesh, tgt: Mesh, aligned: _Aligned, pairs: np.ndarray | Non
             src, tgt, aligned.spectra, chosen.mapping, choice.other, pairs, extremities=settings.extremities,
             refine=settings.refine, refine_k=settings.refine_k, bijective=settings.bijective,
             reliable=aligned.reliable, shells=shell_stage, timer=timer, described=described, tip_starts=starts,
-            random_state=settings.random_state)
+            random_state=settings.random_state, fine=fine)
     return choice
 
 

@@ -32,6 +32,7 @@ import numpy as np
 
 from ..choice.symmetry import SYMMETRY_MODES
 from ..core.geodesics import DEFAULT_GEODESIC, GEODESIC_METHODS
+from ..core.coarse import COARSE_VERTICES
 from ..core.holes import fills
 from ..errors import ParameterError
 from ..runtime.checks import check_bool, check_choice, check_float, check_int, check_seed
@@ -49,6 +50,8 @@ from .methods import METHOD_NAMES, reject_inapplicable
 
 __all__ = ["Settings", "SHAPE_SETTINGS", "REFINE_K", "shape_settings", "as_settings"]
 
+#: The fewest vertices of a coarse copy: fewer blur a hand or a foot into the arm or leg.
+MIN_COARSE_VERTICES = 300
 #: Settings whose value must be True or False (numpy's too), in the order they are checked.
 _SWITCHES = ("bijective", "shells", "extremities", "oriented_starts", "prealign")
 #: The spectral pipeline's switches that only it checks (with :data:`_SWITCHES`).
@@ -182,6 +185,15 @@ class Settings:
         :class:`~meshcorr.errors.PartialityError`). When it is None and one
         shape has a long open boundary the other lacks,
         :class:`~meshcorr.errors.PartialShapeWarning` names the mode to use.
+    coarse_vertices : int
+        Make the global choice on coarse copies of about this many vertices
+        (:mod:`meshcorr.core.coarse`): a mesh with more vertices is decimated,
+        steps 1-6 and the whole-map choice run on the copies, and only the
+        chosen map is carried to every vertex and refined there (ZoomOut, then
+        the smooth shells). The choice then costs the same at any vertex
+        count. 0 runs every step on the meshes themselves (the reference; also
+        what ``refine=False``, ``bijective``, ``symmetry`` other than "auto"
+        and point clouds do).
     fill_holes : bool
         Close the meshes' holes before matching: each simple boundary loop
         gets a fan of triangles around a new centre vertex, and the map is
@@ -215,6 +227,7 @@ class Settings:
     oriented_starts: bool = False
     partial: str | None = None
     fill_holes: bool = True
+    coarse_vertices: int = COARSE_VERTICES
     # the output and the input
     bijective: bool = False
     largest_component: bool = False
@@ -258,6 +271,7 @@ class Settings:
         values.update(refine_k=check_int("refine_k", self.refine_k, minimum=2),
                       reorder=check_choice("reorder", self.reorder, REORDER_MODES),
                       n_anchors=check_int("n_anchors", self.n_anchors, minimum=0),
+                      coarse_vertices=_coarse_size(self.coarse_vertices),
                       anchor_weight=check_float("anchor_weight", self.anchor_weight, minimum=0.0),
                       mode=check_choice("mode", self.mode, MODES))
         if self.max_memory is not None:
@@ -309,6 +323,16 @@ class Settings:
         if out["landmarks"] is not None:
             out["landmarks"] = np.asarray(out["landmarks"]).tolist()
         return out
+
+
+def _coarse_size(value) -> int:
+    """``coarse_vertices`` checked: 0 (off) or at least :data:`MIN_COARSE_VERTICES`."""
+    value = check_int("coarse_vertices", value, minimum=0)
+    if 0 < value < MIN_COARSE_VERTICES:
+        raise ParameterError(f"coarse_vertices={value} (--coarse-vertices) is too few for the global choice: "
+                             f"give 0 (every step on the full meshes) or at least {MIN_COARSE_VERTICES} "
+                             f"(default {COARSE_VERTICES}).")
+    return value
 
 
 def as_settings(settings: Settings | None, overrides: dict) -> Settings:

@@ -113,7 +113,8 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = RE
                  landmarks: np.ndarray | None = None, orientation: float | None = None,
                  descriptors: tuple[np.ndarray, np.ndarray] | None = None,
                  part_fraction: float | None = None, region: np.ndarray | None = None,
-                 weights: np.ndarray | None = None, random_state: int | None = 0) -> np.ndarray:
+                 weights: np.ndarray | None = None, random_state: int | None = 0,
+                 energy: dict | None = None) -> np.ndarray:
     """Refine a vertex map by aligning the shapes' smooth shells (module docstring).
 
     Parameters
@@ -159,6 +160,11 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = RE
         its cut weighted down).
     random_state : int or None
         Seed of the bases' start vectors and of the sample.
+    energy : dict, optional
+        Filled with what is left of the alignment after the last step, the
+        mass-weighted mean over source vertices of the squared distance to
+        the image in the product space (``"alignment"``) and in the
+        coordinates alone (``"extrinsic"``), shapes at unit area.
 
     Returns
     -------
@@ -213,6 +219,8 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = RE
         mapping[sample] = step(p1, phi2[:, :k2(size)], _low_pass(p1, m1, x1), points, mapping, sample)
     points = _shell_points(phi2, m2, x2, faces2, k2(k), low_pass=False, spectral=not part)
     mapping = step(phi1, phi2, x1, points, mapping, np.arange(n1))
+    if energy is not None:  # the area-weighted mean squared residual of the last step
+        energy.update(alignment=float(m1 @ step.residual[0]), extrinsic=float(m1 @ step.residual[1]))
     return step.pin(mapping)
 
 
@@ -299,9 +307,14 @@ class _Step:
         if self.descriptors is not None:  # the landmarks' distances (pipeline: the user's landmarks)
             queries.append(self.descriptors[0][rows])
             points = np.hstack([points, self.descriptors[1]])
-        if self.pool is not None:
-            return self.pool[nearest_vertices(np.hstack(queries), points[self.pool])]
-        return nearest_vertices(np.hstack(queries), points)
+        queries = np.hstack(queries)
+        found = (self.pool[nearest_vertices(queries, points[self.pool])] if self.pool is not None
+                 else nearest_vertices(queries, points))
+        # What is left of the alignment at these rows: the squared product-space distances
+        # (kept for the whole-map choice, meshcorr.choice.selection), and the coordinates' part alone.
+        gaps = queries - points[found]
+        self.residual = (np.einsum("ij,ij->i", gaps, gaps), np.einsum("ij,ij->i", gaps[:, :3], gaps[:, :3]))
+        return found
 
 
 def _rigid(points: np.ndarray, onto: np.ndarray, weights: np.ndarray, side: float):

@@ -1,0 +1,144 @@
+"""How sure the whole-map choice is: the energy margin to the best rival map.
+
+The whole-map choice (:mod:`meshcorr.choice.selection`) keeps the candidate
+map of least energy. Its candidates include near-copies of one another (a
+map, its repair, its smooth-shell refinement) and maps of a different
+*global configuration*: the mirror image, the shape turned front to back,
+limbs exchanged. The choice is only as sure as the gap between the chosen
+map and the best map of a different configuration, the **rival**:
+
+.. math::
+
+    \\text{margin} = \\log_{10} E(\\text{rival}) - \\log_{10} E(\\text{chosen}),
+
+with :math:`E` the energy the choice ranks by
+(:func:`meshcorr.choice.selection.energy`). A candidate is a rival when it
+sends the seeded source vertices of the metric distortion on average
+farther than :data:`RIVAL_DISTANCE` (normalised geodesic distance on the
+target) from where the chosen map sends them. The margin is undefined
+(``inf``) when no candidate is a rival. Only maps the choice's rules let
+compete are rivals (:func:`meshcorr.choice.selection.eligible`: those that
+keep as many of the user's landmarks and, where the outside is defined,
+the orientation), so the margin is never negative: a mirror image that the
+orientation sets aside, or a map the landmarks contradict, does not make a
+choice unsure.
+
+Below :data:`LOW_MARGIN` the choice is reported as unsure, with the few
+source vertices where the chosen map and the rival disagree most, spread
+over the shape (each at least :data:`SUGGESTION_SPACING` from the others):
+a landmark on each settles the choice (``landmarks=``, ``--landmarks``).
+:data:`LOW_MARGIN` was chosen on a fixed half of each set of
+``benchmarks/robustness.py`` to flag most wrong maps and few right ones
+(``benchmarks/RESULTS-robustness.md``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+__all__ = ["LOW_MARGIN", "RIVAL_DISTANCE", "Confidence", "choice_confidence", "unsure_message"]
+
+#: A candidate whose images lie on average farther than this from the chosen map's is a rival.
+RIVAL_DISTANCE = 0.1
+#: Margins (decades of energy) below this are reported as an unsure choice.
+LOW_MARGIN = 0.3
+#: Landmarks suggested for an unsure choice.
+N_SUGGESTIONS = 3
+#: Least normalised geodesic distance between two suggested source vertices.
+SUGGESTION_SPACING = 0.25
+
+
+@dataclass(frozen=True)
+class Confidence:
+    """How sure the whole-map choice is (module docstring).
+
+    Attributes
+    ----------
+    margin : float
+        Decades of energy between the best rival and the chosen map
+        (``inf`` without a rival).
+    rival : str or None
+        The rival candidate's origin.
+    suggestions : (s, 3) int
+        Rows ``(source vertex, its image under the chosen map, its image
+        under the rival)`` where the two disagree most (local numbering of
+        the matched meshes); empty without a rival.
+    """
+
+    margin: float
+    rival: str | None
+    suggestions: np.ndarray
+
+    @property
+    def low(self) -> bool:
+        """Whether the choice is unsure (margin below :data:`LOW_MARGIN`)."""
+        return bool(self.margin < LOW_MARGIN)
+
+    def to_dict(self) -> dict:
+        return {"margin": None if not np.isfinite(self.margin) else round(float(self.margin), 4),
+                "low": self.low, "rival": self.rival,
+                "suggested_landmarks": [{"source": int(s), "chosen": int(a), "rival": int(b)}
+                                        for s, a, b in self.suggestions]}
+
+
+def choice_confidence(candidates: list, chosen, energies: dict, source_geodesics: Callable[[int], np.ndarray],
+                      target_geodesics: Callable[[int], np.ndarray], sources: np.ndarray) -> Confidence:
+    """The margin of ``chosen`` over its best rival and the landmarks that would settle it.
+
+    Parameters
+    ----------
+    candidates : list of MapCandidate
+        The scored candidates the energy chooses among
+        (:func:`meshcorr.choice.selection.eligible`), ``chosen`` among them.
+    chosen : MapCandidate
+    energies : dict
+        ``id(candidate) -> energy`` (:func:`meshcorr.choice.selection.energy`).
+    source_geodesics, target_geodesics : callable
+        ``f(i)``: normalised geodesic distances from vertex i, ``(n,)``.
+    sources : (m,) int
+        Seeded source vertices at which maps are compared.
+
+    Returns
+    -------
+    confidence : Confidence
+    """
+    sources = np.asarray(sources, dtype=np.int64)
+    images = chosen.mapping[sources]
+    rows = [np.asarray(target_geodesics(int(t))) for t in images]
+    best, best_gaps = None, None
+    for candidate in candidates:
+        if candidate is chosen:
+            continue
+        gaps = np.array([row[candidate.mapping[s]] for row, s in zip(rows, sources)])
+        if gaps.mean() > RIVAL_DISTANCE and (best is None or energies[id(candidate)] < energies[id(best)]):
+            best, best_gaps = candidate, gaps
+    if best is None:
+        return Confidence(float("inf"), None, np.empty((0, 3), dtype=np.int64))
+    margin = float(np.log10(max(energies[id(best)], 1e-300)) - np.log10(max(energies[id(chosen)], 1e-300)))
+    picked: list[int] = []
+    for index in np.argsort(-best_gaps, kind="stable"):
+        if len(picked) == N_SUGGESTIONS or best_gaps[index] <= RIVAL_DISTANCE:
+            break
+        row = np.asarray(source_geodesics(int(sources[index])))
+        if all(row[sources[other]] >= SUGGESTION_SPACING for other in picked):
+            picked.append(int(index))
+    chosen_sources = sources[picked]
+    suggestions = np.stack([chosen_sources, chosen.mapping[chosen_sources], best.mapping[chosen_sources]], axis=1)
+    return Confidence(margin, best.origin, suggestions.astype(np.int64))
+
+
+def unsure_message(report: dict) -> str:
+    """The warning of an unsure choice, from ``result.confidence`` (:meth:`Confidence.to_dict`, input numbering)."""
+    rows = report["suggested_landmarks"]
+    sources = ", ".join(str(row["source"]) for row in rows)
+    chosen = ", ".join(str(row["chosen"]) for row in rows)
+    rival = ", ".join(str(row["rival"]) for row in rows)
+    return (f"The global choice of the map is unsure: a map of another configuration ({report['rival']!r}: "
+            f"a mirror image, a front/back turn or limbs exchanged) scores within {report['margin']:.2f} "
+            f"decades of the chosen one (below {LOW_MARGIN} is unsure). They disagree most at source vertices "
+            f"{sources}, which the chosen map sends to target vertices {chosen} and the other to {rival}. "
+            "Look at the map (meshcorr show), then settle it with landmarks on those vertices: "
+            "landmarks=[(source, target), ...] or --landmarks FILE, one 'source target' pair a line.")

@@ -1,0 +1,135 @@
+"""Coarse copies of a mesh: a few thousand vertices standing for all of it, and the way back.
+
+The whole-map choice (docs/method.md, "coarse to fine") compares many
+complete candidate maps; its cost grows with the vertex count, while what
+it decides (which global configuration is right: left/right, front/back,
+which limb is which) is visible on a copy of a few thousand vertices. A
+coarse copy is made by edge collapse: libigl's ``decimate`` collapses the
+shortest edge first, placing the merged vertex at the edge midpoint, and
+refuses collapses that would break the manifold (the link condition), so
+the copy has the fine mesh's topology. It is written by libigl because no
+other library in use keeps a manifold while decimating
+(``fast-simplification`` leaves duplicate faces and loose pieces).
+
+Each coarse vertex has a *parent*, the fine vertex it was born from, and
+each fine vertex a *child*, the coarse vertex nearest to it in space. A map
+between two coarse copies becomes a map between the fine meshes by
+:math:`T(f) = \\mathrm{parent}_2(T_c(\\mathrm{child}_1(f)))`
+(:meth:`CoarseCopy.lift_map`), a start that the fine refinement then sharpens.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..errors import MeshError
+from .mesh import Mesh, as_mesh
+
+__all__ = ["COARSE_ABOVE", "COARSE_VERTICES", "CoarseCopy", "coarse_copy", "needs_copy"]
+
+#: Vertices of a coarse copy. The choice on copies of 2500 vertices turned more maps front to back
+#: than on the full meshes (TOSCA gorilla -> woman, SHREC'07 humans) and on copies of 5000 vertices
+#: it still changed the choice of 5 of 17 SHREC'07 pairs, either way (benchmarks/RESULTS-robustness.md).
+COARSE_VERTICES = 5000
+#: A mesh gets a coarse copy when it has more than this many times the copy's vertices: below it
+#: the whole pipeline runs on the meshes, as the measured sets do (TOSCA 5k, SHREC'07 <= 16k).
+COARSE_ABOVE = 4.0
+
+
+@dataclass(frozen=True)
+class CoarseCopy:
+    """A coarse copy of a mesh and its links to the fine mesh.
+
+    Attributes
+    ----------
+    mesh : Mesh
+        The coarse mesh (``m`` vertices), named as the fine one; the fine
+        mesh itself when it is not larger than the copy would be.
+    parent : (m,) int
+        Fine vertex each coarse vertex was born from.
+    child : (n,) int
+        Coarse vertex nearest each fine vertex.
+    fine : Mesh
+        The mesh it is a copy of.
+    """
+
+    mesh: Mesh
+    parent: np.ndarray
+    child: np.ndarray
+    fine: Mesh
+
+    @property
+    def is_identity(self) -> bool:
+        """Whether the copy is the fine mesh itself."""
+        return len(self.parent) == len(self.child)
+
+    def lift_map(self, coarse_map: np.ndarray, target: "CoarseCopy") -> np.ndarray:
+        """A map between coarse copies as a map between the fine meshes.
+
+        Parameters
+        ----------
+        coarse_map : (m1,) int
+            ``coarse_map[c]``: target coarse vertex of source coarse vertex c.
+        target : CoarseCopy
+            The target's coarse copy.
+
+        Returns
+        -------
+        fine_map : (n1,) int
+            :math:`\\mathrm{parent}_2(T_c(\\mathrm{child}_1(f)))` for each fine source vertex f.
+        """
+        return target.parent[np.asarray(coarse_map)[self.child]]
+
+
+def needs_copy(n_mesh: int, n_vertices: int = COARSE_VERTICES) -> bool:
+    """Whether a mesh of ``n_mesh`` vertices gets a coarse copy of ``n_vertices`` (0: never)."""
+    return 0 < n_vertices and n_mesh > COARSE_ABOVE * n_vertices
+
+
+def coarse_copy(mesh: Mesh, n_vertices: int = COARSE_VERTICES) -> CoarseCopy | None:
+    """A coarse copy of ``mesh`` with about ``n_vertices`` vertices (module docstring).
+
+    Parameters
+    ----------
+    mesh : Mesh
+        A triangle mesh (closed or with boundary), manifold.
+    n_vertices : int
+        Vertices wanted; a mesh with at most :data:`COARSE_ABOVE` times as many
+        keeps its own vertices (the copy is the identity).
+
+    Returns
+    -------
+    copy : CoarseCopy or None
+        None when the mesh cannot be decimated to a valid mesh (a point
+        cloud, or an edge collapse that stops early or leaves a mesh that
+        :func:`meshcorr.core.validate` refuses): the caller then works on
+        the fine mesh.
+    """
+    n = mesh.n_vertices
+    if not needs_copy(n, n_vertices):
+        identity = np.arange(n)
+        return CoarseCopy(mesh, identity, identity, mesh)
+    if mesh.is_cloud:
+        return None
+    import igl  # libigl (module docstring); imported here, as only large meshes need it
+
+    faces_wanted = int(round(len(mesh.faces) * n_vertices / n))
+    vertices = np.asfortranarray(mesh.vertices, dtype=np.float64)
+    faces = np.asfortranarray(mesh.faces, dtype=np.int32)
+    try:  # (U, G, J, I): coarse vertices and faces, birth faces, birth vertices (a success flag first in
+        # older libigl releases)
+        coarse_vertices, coarse_faces, _, parent = igl.decimate(vertices, faces, faces_wanted)[-4:]
+    except (RuntimeError, ValueError):
+        return None
+    if len(coarse_vertices) > 1.5 * n_vertices:  # the collapses stopped early (the link condition)
+        return None
+    try:
+        coarse = as_mesh((np.ascontiguousarray(coarse_vertices), np.ascontiguousarray(coarse_faces)),
+                         name=mesh.name)
+    except MeshError:
+        return None
+    _, child = cKDTree(coarse.vertices).query(mesh.vertices)
+    return CoarseCopy(coarse, np.asarray(parent, dtype=np.int64), np.asarray(child, dtype=np.int64), mesh)

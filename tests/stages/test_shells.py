@@ -272,3 +272,16 @@ def test_a_sheet_without_a_reliable_outside_is_still_aligned():
         result = meshcorr.match((vertices, faces), (vertices * 1.5, faces))
     assert not result.orientation_reliable and "shells" in result.timings
     assert np.mean(result.map == np.arange(n * n)) > 0.99
+
+
+def test_what_is_left_of_the_alignment_is_reported(poses):
+    """energy=: the last step's residuals and deformation; none for a shape against itself."""
+    rest, bent = poses
+    same: dict = {}
+    shell_refine(rest, rest, np.arange(rest.n_vertices), k=30, energy=same)
+    assert set(same) == {"alignment", "extrinsic", "deformation"}
+    assert same["alignment"] == pytest.approx(0.0, abs=1e-12) and same["deformation"] < 1e-12
+    posed: dict = {}
+    shell_refine(rest, bent, np.arange(rest.n_vertices), k=30, energy=posed)
+    # the bent pose needs a deformation, and its coordinates are not matched exactly by any vertex
+    assert posed["deformation"] > 1e-4 and 0.0 < posed["extrinsic"] <= posed["alignment"]

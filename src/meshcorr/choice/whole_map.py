@@ -25,6 +25,7 @@ from .extremities import match_extremities, spectrum_extremities
 from .oriented_start import fit_oriented_map
 from .repair import repair_candidates
 from .confidence import Confidence, choice_confidence
+from .sign_search import sign_search_starts
 from .selection import energy as map_energy
 from .selection import (MapCandidate, candidate_summaries, choose_map, distortion_sources, eligible, score_candidates,
                         shell_candidates)
@@ -55,7 +56,8 @@ def whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, sp
                       pairs: np.ndarray | None, *, extremities: bool, refine: bool, refine_k: int,
                       bijective: bool, reliable: bool, shells: bool, timer: StageTimer,
                       described: tuple[np.ndarray, np.ndarray] | None = None,
-                      tip_starts: tuple[str, ...] = EXTREMITY_STARTS, random_state, fine=None) -> WholeMapChoice:
+                      tip_starts: tuple[str, ...] = EXTREMITY_STARTS, random_state, fine=None,
+                      sign_search: bool = False) -> WholeMapChoice:
     """Candidate maps from extremities and landmarks, scored with the spectral map; the winner.
 
     With ``shells`` on and a reliable orientation, the choice is made between
@@ -70,6 +72,8 @@ def whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, sp
     ``fine``: when ``src`` and ``tgt`` are coarse copies, the two
     :class:`~meshcorr.core.coarse.CoarseCopy` (the curvature disagreement is
     measured on the full meshes: :func:`meshcorr.choice.selection.score_candidates`).
+    ``sign_search``: also start from the configurations of the first
+    Laplace-Beltrami functions' signs (:mod:`meshcorr.choice.sign_search`).
     """
     with timer.stage("whole-map"):
         g1, g2 = spectra[0].geodesics_from, spectra[1].geodesics_from
@@ -87,6 +91,8 @@ def whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, sp
                              else landmark_map(g1, g2, assignment))
                     suffix = "" if how == hows[0] else f"-{how}"
                     starts.append((f"extremities-{rank}{suffix}", start, {"extremity_energy": energy}))
+        if sign_search:
+            starts += sign_search_starts(src, tgt, reliable=reliable, random_state=random_state)
         candidates = [MapCandidate("spectral", spectral_map)]
         if spectral_other is not None:  # unrefined: it is kept as the alternative, rarely chosen
             candidates.append(MapCandidate("spectral-alternative", spectral_other))

@@ -129,6 +129,10 @@ def add_parser(sub) -> None:
                    help="also start maps from the matched tips by an orientation-preserving fit: better "
                         "for people standing (head, hands and feet in one plane cannot tell front from "
                         "back), worse across species (default: off)")
+    g.add_argument("--sign-search", action=argparse.BooleanOptionalAction, default=DEFAULTS.sign_search,
+                   help="also start the whole-map choice from every sign configuration of the first "
+                        "Laplace-Beltrami functions, the best by their smooth-shell alignment (a wider search "
+                        f"for the global configuration; default: {'on' if DEFAULTS.sign_search else 'off'})")
     g.add_argument("--partial", choices=("source", "target"), default=DEFAULTS.partial,
                    help="SOURCE is a part of TARGET (one side of a scan, a cut, large holes), or the reverse: "
                         "the map covers the part only (with 'target', SOURCE vertices outside the matched "

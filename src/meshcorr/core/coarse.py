@@ -84,12 +84,12 @@ class CoarseCopy:
         return target.parent[np.asarray(coarse_map)[self.child]]
 
 
-def needs_copy(n_mesh: int, n_vertices: int = COARSE_VERTICES) -> bool:
+def needs_copy(n_mesh: int, n_vertices: int = COARSE_VERTICES, above: float = COARSE_ABOVE) -> bool:
     """Whether a mesh of ``n_mesh`` vertices gets a coarse copy of ``n_vertices`` (0: never)."""
-    return 0 < n_vertices and n_mesh > COARSE_ABOVE * n_vertices
+    return 0 < n_vertices and n_mesh > above * n_vertices
 
 
-def coarse_copy(mesh: Mesh, n_vertices: int = COARSE_VERTICES) -> CoarseCopy | None:
+def coarse_copy(mesh: Mesh, n_vertices: int = COARSE_VERTICES, *, above: float = COARSE_ABOVE) -> CoarseCopy | None:
     """A coarse copy of ``mesh`` with about ``n_vertices`` vertices (module docstring).
 
     Parameters
@@ -97,8 +97,10 @@ def coarse_copy(mesh: Mesh, n_vertices: int = COARSE_VERTICES) -> CoarseCopy | N
     mesh : Mesh
         A triangle mesh (closed or with boundary), manifold.
     n_vertices : int
-        Vertices wanted; a mesh with at most :data:`COARSE_ABOVE` times as many
-        keeps its own vertices (the copy is the identity).
+        Vertices wanted; a mesh with at most ``above`` times as many keeps
+        its own vertices (the copy is the identity).
+    above : float
+        Default :data:`COARSE_ABOVE`.
 
     Returns
     -------
@@ -109,7 +111,7 @@ def coarse_copy(mesh: Mesh, n_vertices: int = COARSE_VERTICES) -> CoarseCopy | N
         the fine mesh.
     """
     n = mesh.n_vertices
-    if not needs_copy(n, n_vertices):
+    if not needs_copy(n, n_vertices, above):
         identity = np.arange(n)
         return CoarseCopy(mesh, identity, identity, mesh)
     if mesh.is_cloud:

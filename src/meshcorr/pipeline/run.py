@@ -391,7 +391,7 @@ def _choose_map(src: Mesh, tgt: Mesh, aligned: _Aligned, pairs: np.ndarray | Non
             src, tgt, aligned.spectra, chosen.mapping, choice.other, pairs, extremities=settings.extremities,
             refine=settings.refine, refine_k=settings.refine_k, bijective=settings.bijective,
             reliable=aligned.reliable, shells=shell_stage, timer=timer, described=described, tip_starts=starts,
-            random_state=settings.random_state, fine=fine)
+            random_state=settings.random_state, fine=fine, sign_search=settings.sign_search)
     return choice
 
 
@@ -438,7 +438,7 @@ def _whole_params(settings: Settings, resolved: dict, landmarks: list | None) ->
                 largest_component=s.largest_component, random_state=s.random_state, mode=resolved["mode"],
                 n_samples=s.n_samples, max_memory=resolved["max_memory"], symmetry=s.symmetry, refine=s.refine,
                 refine_k=s.refine_k, shells=resolved["shells"], anchor_scale=s.anchor_scale,
-                extremities=s.extremities, oriented_starts=s.oriented_starts,
+                extremities=s.extremities, oriented_starts=s.oriented_starts, sign_search=s.sign_search,
                 fill_holes=shape_settings(s)["fill_holes"], landmarks=landmarks)  # as they ran
 
 

@@ -53,7 +53,7 @@ __all__ = ["Settings", "SHAPE_SETTINGS", "REFINE_K", "shape_settings", "as_setti
 #: The fewest vertices of a coarse copy: fewer blur a hand or a foot into the arm or leg.
 MIN_COARSE_VERTICES = 300
 #: Settings whose value must be True or False (numpy's too), in the order they are checked.
-_SWITCHES = ("bijective", "shells", "extremities", "oriented_starts", "prealign")
+_SWITCHES = ("bijective", "shells", "extremities", "oriented_starts", "sign_search", "prealign")
 #: The spectral pipeline's switches that only it checks (with :data:`_SWITCHES`).
 _SPECTRAL_SWITCHES = ("scale_eigenvalues", "refine", "largest_component", "fill_holes")
 
@@ -170,6 +170,12 @@ class Settings:
         mirrored assignment into a map turned front to back that the energies
         do not always reject), so it is off by default
         (``benchmarks/RESULTS-robustness.md``). Needs a reliable orientation.
+    sign_search : bool
+        Also start the whole-map choice from the configurations of the first
+        Laplace-Beltrami functions' signs, the best by their smooth-shell
+        alignment energy (:mod:`meshcorr.choice.sign_search`, after Smooth
+        Shells): a wider search for the global configuration, on coarse
+        copies. Used with ``symmetry="auto"``.
     partial : {None, "source", "target"}
         None: both shapes are whole (they may have small holes).
         ``"source"``: the source is a part of the target (one side of a scan,
@@ -225,6 +231,7 @@ class Settings:
     landmarks: Sequence[tuple[int, int]] | np.ndarray | None = None
     extremities: bool = True
     oriented_starts: bool = False
+    sign_search: bool = False
     partial: str | None = None
     fill_holes: bool = True
     coarse_vertices: int = COARSE_VERTICES

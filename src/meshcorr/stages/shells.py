@@ -164,7 +164,9 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = RE
         Filled with what is left of the alignment after the last step, the
         mass-weighted mean over source vertices of the squared distance to
         the image in the product space (``"alignment"``) and in the
-        coordinates alone (``"extrinsic"``), shapes at unit area.
+        coordinates alone (``"extrinsic"``), and the mass-weighted squared
+        norm of the last step's smooth deformation (``"deformation"``),
+        shapes at unit area.
 
     Returns
     -------
@@ -220,7 +222,8 @@ def shell_refine(source: Mesh, target: Mesh, mapping: np.ndarray, *, k: int = RE
     points = _shell_points(phi2, m2, x2, faces2, k2(k), low_pass=False, spectral=not part)
     mapping = step(phi1, phi2, x1, points, mapping, np.arange(n1))
     if energy is not None:  # the area-weighted mean squared residual of the last step
-        energy.update(alignment=float(m1 @ step.residual[0]), extrinsic=float(m1 @ step.residual[1]))
+        energy.update(alignment=float(m1 @ step.residual[0]), extrinsic=float(m1 @ step.residual[1]),
+                      deformation=step.deformation)
     return step.pin(mapping)
 
 
@@ -278,6 +281,7 @@ class _Step:
         self.part_fraction, self.pool = part_fraction, pool
         self.landmarks = None if landmarks is None or len(landmarks) == 0 else np.asarray(landmarks)
         self.descriptors = None if descriptors is None else tuple(DESCRIPTOR_WEIGHT * d for d in descriptors)
+        self.deformation = 0.0  # the last step's (see __call__)
 
     def pin(self, mapping: np.ndarray) -> np.ndarray:
         if self.landmarks is not None:
@@ -294,7 +298,9 @@ class _Step:
         # projected on the k functions (mass-weighted, estimated on the sample).
         side = self.side
         moved = _rigid(shell1[s], shell2[images], self.weights, side)(shell1)
-        deformed = moved + p1 @ (p1[s].T @ (self.weights[:, None] * (shell2[images] - moved[s])))
+        coefficients = p1[s].T @ (self.weights[:, None] * (shell2[images] - moved[s]))  # in the basis
+        self.deformation = float(np.sum(coefficients ** 2))  # its mass-weighted squared norm (orthonormal basis)
+        deformed = moved + p1 @ coefficients
         queries = [deformed[rows], side * NORMAL_WEIGHT * _normals(deformed, self.faces1)[rows]]
         if self.part_fraction is None:
             C = orthogonal_fit(p1[s], p2[images])  # Phi1 C ~ Phi2[T]

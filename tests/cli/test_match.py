@@ -107,3 +107,33 @@ def test_console_script_runs_as_a_process(tube_files_with_truth, tmp_path):
     bad = subprocess.run([sys.executable, "-m", "meshcorr", "match", src, "nope.obj", "-o", str(out)],
                          capture_output=True, text=True, timeout=120)
     assert bad.returncode == 3 and "Traceback" not in bad.stderr  # bad input data
+
+
+@pytest.mark.parametrize("option", ["--alternative-out", "--report"])
+def test_an_output_other_than_the_map_is_not_written_to_a_file_named_dash(tube_files_with_truth, tmp_path,
+                                                                          capsys, monkeypatch, option):
+    # it wrote a file named '-' (issue 31, item 6); only -o goes to stdout
+    src, tgt, _ = tube_files_with_truth
+    monkeypatch.chdir(tmp_path)
+    assert main(["match", src, tgt, "-o", "m.txt", option, "-", "--reorder", "greedy"]) == 2
+    err = capsys.readouterr().err
+    assert f"Cannot write {option} to stdout" in err and "./-" in err
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("output", ["newdir/", "file.txt/", "folder/", "folder"])
+def test_an_output_naming_a_folder_is_refused_and_nothing_written(tube_files_with_truth, tmp_path, capsys,
+                                                                  monkeypatch, output):
+    # 'newdir/' wrote a file 'newdir', 'file.txt/' replaced file.txt (issue 31, item 6)
+    src, tgt, _ = tube_files_with_truth
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "file.txt").write_text("mine\n")
+    (tmp_path / "folder").mkdir()
+    for flag in ("-o", "--alternative-out", "--report"):
+        args = ["-o", output] if flag == "-o" else ["-o", "m.txt", flag, output]
+        assert main(["match", src, tgt, *args, "--reorder", "greedy"]) == 2
+        err = capsys.readouterr().err
+        assert "folder" in err and output in err and "Traceback" not in err
+        assert sorted(os.listdir(tmp_path)) == ["file.txt", "folder"] and not os.listdir(tmp_path / "folder")
+        assert (tmp_path / "file.txt").read_text() == "mine\n"
+

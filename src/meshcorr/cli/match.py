@@ -221,7 +221,7 @@ def run(args) -> int:
     inputs.update({"--landmarks": args.landmarks_file} if args.landmarks_file else {})
     inputs.update({f"--landmarks-vts {v}": v for v in args.landmarks_vts or ()})
     check_outputs({"-o": args.output, "--alternative-out": args.alternative_out, "--report": args.report},
-                  inputs)
+                  inputs, stdout=("-o",))
     landmarks, origin = _read_landmarks(args)
     if args.verbose:
         print(f"meshcorr: matching {args.source} -> {args.target}", file=sys.stderr)

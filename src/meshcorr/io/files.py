@@ -25,15 +25,17 @@ __all__ = ["atomic_write", "check_outputs", "staged_writes"]
 _STAGED: ContextVar[list | None] = ContextVar("meshcorr_staged_writes", default=None)
 
 
-def check_outputs(outputs: dict, inputs: dict | None = None) -> None:
+def check_outputs(outputs: dict, inputs: dict | None = None, *, stdout: tuple = ()) -> None:
     """Refuse, before any work, output paths that cannot or must not be written.
 
-    Checked for each output: it is not the path of an input (compared as
-    real paths, and as the same file where both exist), no two outputs share
-    a path, its folder exists and a file can be created there (a probe file
-    is made and removed: this catches read-only file systems and ``/proc``),
-    and an existing file there is a regular file that may be replaced (not
-    read-only, not immutable). ``"-"`` (stdout) and ``None`` are skipped.
+    Checked for each output: it is not ``"-"`` unless it may go to stdout,
+    its path does not end with a path separator (a folder's name), it is not
+    the path of an input (compared as real paths, and as the same file where
+    both exist), no two outputs share a path, its folder exists and a file
+    can be created there (a probe file is made and removed: this catches
+    read-only file systems and ``/proc``), and an existing file there is a
+    regular file that may be replaced (not read-only, not immutable).
+    ``None`` is skipped.
 
     Parameters
     ----------
@@ -41,6 +43,9 @@ def check_outputs(outputs: dict, inputs: dict | None = None) -> None:
         What each output is (``"-o"``, ``"--report"``, ...) and where it goes.
     inputs : dict of str -> path, optional
         The input files, named the same way.
+    stdout : tuple of str
+        The outputs that ``"-"`` sends to stdout (e.g. ``("-o",)``); for
+        any other, ``"-"`` is refused (it wrote a file named ``-``).
 
     Raises
     ------
@@ -50,8 +55,13 @@ def check_outputs(outputs: dict, inputs: dict | None = None) -> None:
     inputs = {what: Path(path) for what, path in (inputs or {}).items() if path is not None}
     seen: dict[str, str] = {}
     for what, path in outputs.items():
-        if path is None or str(path) == "-":
+        if path is None or (str(path) == "-" and what in stdout):
             continue
+        if str(path) == "-":
+            others = f" (only {' and '.join(stdout)} can)" if stdout else ""
+            raise OutputError(f"Cannot write {what} to stdout ('-'): it is written to a file only{others}. "
+                              "Give a file path (./- for a file named '-').")
+        refuse_folder_name(path, what)
         path = Path(path)
         real = os.path.realpath(path)
         for source, input_path in inputs.items():
@@ -81,6 +91,26 @@ def check_outputs(outputs: dict, inputs: dict | None = None) -> None:
         except OSError as exc:
             raise OutputError(f"Cannot write {what} {path}: no file can be created in {folder} "
                               f"({exc.strerror}). Give a path in a writable folder.") from exc
+
+
+def refuse_folder_name(path, what: str = "the output") -> None:
+    """Raise :class:`OutputError` if ``path`` ends with a path separator: it names a folder, not a file.
+
+    ``Path("maps/")`` drops the separator, so ``-o maps/`` wrote a file ``maps`` and ``-o file.txt/``
+    replaced ``file.txt``.
+    """
+    text = os.fspath(path)
+    text = text.decode(errors="replace") if isinstance(text, bytes) else text
+    if not text.endswith(tuple(sep for sep in (os.sep, os.altsep) if sep)):
+        return
+    start = f"Cannot write {what} {text}: a path ending with '{text[-1]}' names a folder"
+    folder = text.rstrip(os.sep + (os.altsep or "")) or text
+    if os.path.isdir(folder):
+        raise OutputError(f"{start}. Give a file name in it, e.g. {text}map.txt.")
+    if os.path.exists(folder):
+        raise OutputError(f"{start}, and {folder} is a file. Give the file path without the trailing '{text[-1]}'.")
+    raise OutputError(f"{start}, and there is no folder {folder}. Give a file path without the trailing "
+                      f"'{text[-1]}', or create the folder and give a file name in it, e.g. {text}map.txt.")
 
 
 def sibling(path: Path, kind: str) -> Path:
@@ -156,9 +186,11 @@ def atomic_write(path, writer: Callable[[BinaryIO], object]) -> None:
     Raises
     ------
     OutputError
-        If the directory of ``path`` does not exist or the file cannot be
-        created there (a :class:`ParameterError`).
+        If ``path`` ends with a path separator, the directory of ``path``
+        does not exist or the file cannot be created there (a
+        :class:`ParameterError`).
     """
+    refuse_folder_name(path)
     path = Path(path)
     directory = path.parent
     if not directory.is_dir():

@@ -137,3 +137,33 @@ def test_an_output_naming_a_folder_is_refused_and_nothing_written(tube_files_wit
         assert sorted(os.listdir(tmp_path)) == ["file.txt", "folder"] and not os.listdir(tmp_path / "folder")
         assert (tmp_path / "file.txt").read_text() == "mine\n"
 
+
+@pytest.mark.parametrize("name", ["m.txt", "m.npy"])
+def test_a_full_disk_is_said_with_the_path_and_exit_3(tube_files_with_truth, tmp_path, capsys, monkeypatch, name):
+    # it was "internal error ... report it", exit 1 (issue 31, item 11)
+    import errno
+
+    src, tgt, _ = tube_files_with_truth
+    out = tmp_path / name
+
+    def full(fd):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(os, "fsync", full)
+    code = main(["match", src, tgt, "-o", str(out), "--reorder", "greedy", "-q"])
+    err = capsys.readouterr().err
+    assert code == 3 and "internal error" not in err and "Traceback" not in err
+    assert f"Cannot write {out}: the disk is full" in err
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (Linux)")
+@pytest.mark.parametrize("output", [["--json"], ["-o", "-"]])
+def test_stdout_on_a_full_disk_is_said_and_exit_3(tube_files_with_truth, output):
+    src, tgt, _ = tube_files_with_truth
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "meshcorr", "match", src, tgt, *output, "-q",
+                               "--reorder", "greedy"], stdout=full, stderr=subprocess.PIPE, text=True, timeout=120)
+    assert proc.returncode == 3, proc.stderr
+    assert "Cannot write stdout" in proc.stderr and "the disk is full" in proc.stderr
+    assert "Traceback" not in proc.stderr and "Exception ignored" not in proc.stderr

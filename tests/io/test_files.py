@@ -1,5 +1,6 @@
 """meshcorr.io.files: atomic writes leave either the whole new file or the old one."""
 
+import errno
 import os
 
 import numpy as np
@@ -87,3 +88,27 @@ def test_stdout_is_taken_only_for_the_outputs_that_can_go_there(tmp_path):
     with pytest.raises(ParameterError, match=r"Cannot write --report to stdout .*\./- for a file named"):
         check_outputs({"-o": "-", "--report": "-"}, stdout=("-o",))
 
+
+@pytest.mark.parametrize("code", [errno.ENOSPC, errno.EDQUOT])
+@pytest.mark.parametrize("when", ["write", "fsync"])
+def test_a_full_disk_is_said_with_the_path_and_leaves_nothing(tmp_path, monkeypatch, code, when):
+    from meshcorr.errors import DiskFullError, OutputError
+
+    path = tmp_path / "out.bin"
+    path.write_bytes(b"old")
+
+    def full(*args):
+        raise OSError(code, os.strerror(code))
+
+    def writer(file):
+        file.write(b"partial")
+        if when == "write":
+            full()
+
+    if when == "fsync":
+        monkeypatch.setattr(os, "fsync", full)
+    with pytest.raises(DiskFullError) as caught:
+        atomic_write(path, writer)
+    assert isinstance(caught.value, OutputError) and str(path) in str(caught.value)
+    assert ("disk is full" if code == errno.ENOSPC else "quota is exceeded") in str(caught.value)
+    assert path.read_bytes() == b"old" and os.listdir(tmp_path) == ["out.bin"]

@@ -1,10 +1,12 @@
 """meshcorr.maps.result: a saved Correspondence is read back only with a map that fits its meshes (issue 31)."""
 
+import errno
+
 import numpy as np
 import pytest
 
 from meshcorr.core.mesh import Mesh
-from meshcorr.errors import InputError
+from meshcorr.errors import InputError, MeshcorrError
 from meshcorr.maps.result import Correspondence
 
 
@@ -69,3 +71,20 @@ def test_the_alternative_map_is_checked_too(saved):
     with pytest.raises(InputError, match="its alternative_map has 3 entries"):
         Correspondence.load(with_map(np.arange(3), name="alternative_map"))
 
+
+def test_a_full_disk_is_a_meshcorr_error_naming_the_path(saved, tmp_path, monkeypatch):
+    # it was a raw OSError; nothing partial is left
+    path, _ = saved
+    result = Correspondence.load(path)
+    import meshcorr.io.arrays
+
+    def full(file, **arrays):
+        file.write(b"partial")
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(meshcorr.io.arrays.np, "savez_compressed", full)
+    out = tmp_path / "again.npz"
+    with pytest.raises(MeshcorrError, match="disk") as caught:
+        result.save(out)
+    assert str(out) in str(caught.value)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["result.npz"]

@@ -9,6 +9,7 @@ place only once all are written.
 
 from __future__ import annotations
 
+import errno
 import os
 import secrets
 import stat
@@ -17,9 +18,12 @@ from contextvars import ContextVar
 from pathlib import Path
 from typing import BinaryIO, Callable
 
-from ..errors import OutputError
+from ..errors import DiskFullError, OutputError
 
 __all__ = ["atomic_write", "check_outputs", "staged_writes"]
+
+#: The errno values of a full disk or quota: written as :class:`DiskFullError`.
+DISK_FULL = tuple(code for code in (errno.ENOSPC, getattr(errno, "EDQUOT", None)) if code is not None)
 
 #: The (temporary file, target) pairs of the innermost :func:`staged_writes` block, if any.
 _STAGED: ContextVar[list | None] = ContextVar("meshcorr_staged_writes", default=None)
@@ -159,6 +163,17 @@ def staged_writes():
         raise
 
 
+def disk_full_message(path, exc: OSError, *, removed: bool = True) -> str:
+    """The words of a full disk (``exc.errno`` in :data:`DISK_FULL`) while writing ``path``.
+
+    ``removed``: the partial file was removed (:func:`atomic_write`); False for a stream such as stdout.
+    """
+    what = "the disk quota is exceeded" if exc.errno != errno.ENOSPC else "the disk is full"
+    left = "nothing was left of it" if removed else "what was written of it is incomplete"
+    return (f"Cannot write {path}: {what} ({exc.strerror or os.strerror(exc.errno)}); {left}. "
+            "Free some space (or write to another disk) and run again.")
+
+
 def _replace(temp: Path, path: Path) -> None:
     try:
         os.replace(temp, path)
@@ -189,6 +204,9 @@ def atomic_write(path, writer: Callable[[BinaryIO], object]) -> None:
         If ``path`` ends with a path separator, the directory of ``path``
         does not exist or the file cannot be created there (a
         :class:`ParameterError`).
+    DiskFullError
+        If the disk or the quota is full (``ENOSPC``, ``EDQUOT``): an
+        :class:`OutputError` naming ``path``; nothing is left of the file.
     """
     refuse_folder_name(path)
     path = Path(path)
@@ -206,6 +224,11 @@ def atomic_write(path, writer: Callable[[BinaryIO], object]) -> None:
             writer(file)
             file.flush()
             os.fsync(file.fileno())
+    except OSError as exc:
+        temp.unlink(missing_ok=True)
+        if exc.errno in DISK_FULL:
+            raise DiskFullError(disk_full_message(path, exc)) from exc
+        raise
     except BaseException:
         temp.unlink(missing_ok=True)
         raise

@@ -85,6 +85,11 @@ def read_map(path, *, name: str | None = None) -> np.ndarray:
                 f"{path}: a map must be a 1-D integer array; got shape {mapping.shape} "
                 f"and dtype {mapping.dtype}."
             )
+        huge = np.flatnonzero(mapping > np.iinfo(np.int64).max)  # uint64: it wrapped to negatives (-1: unmapped)
+        if huge.size:
+            raise InputError(f"{path}: entry {int(huge[0])} is {int(mapping[huge[0]])}, too large for a vertex "
+                             f"index (a {mapping.dtype} array). Write the map as int64, with -1 for an unmapped "
+                             "vertex.")
         return mapping.astype(np.int64)
     try:
         lines = path.read_text(encoding="ascii").splitlines()

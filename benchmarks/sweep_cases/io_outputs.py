@@ -1,5 +1,6 @@
 """Cases of issue 31's items 6, 7 and 13: outputs named '-' or a folder, map and truth entries that cannot be
-vertices, unreadable inputs.
+vertices, unreadable inputs (a folder, bytes that are no text; a file without read permission cannot be made
+here, the sweep may run as root: tests/cli/test_match.py and test_evaluate.py patch the read instead).
 
 Item 11 (a full disk) has no case here: a case cannot fill a disk or redirect the command's stdout;
 tests/io/test_files.py and tests/cli/test_match.py make the writes fail with ENOSPC instead.
@@ -51,6 +52,15 @@ def _truth_with_a_second_target(tmp: Path) -> None:
     (tmp / "pairs.txt").write_text("".join(f"{i} {i}\n" for i in mapping) + "3 7\n")
 
 
+def _bad_inputs(tmp: Path) -> None:
+    """A folder, bytes that are no text, and a truth pair outside the target's vertices."""
+    (tmp / "folder").mkdir()
+    (tmp / "bytes.txt").write_bytes(b"0 1\n\xff\xfe\n")
+    (tmp / "bytes.vts").write_bytes(b"\xff\xfe\n")
+    (tmp / "one.vts").write_text("1\n")
+    (tmp / "far.txt").write_text("1 999999\n")
+
+
 CASES = [
     dict(name="--alternative-out - is refused, not written to a file named '-'",
          argv=["match", "{R}", "{B}", "-o", "{tmp}/m.txt", "--alternative-out", "-"], exit=2,
@@ -74,4 +84,22 @@ CASES = [
     dict(name="a truth file giving one source vertex two targets is refused", setup=_truth_with_a_second_target,
          argv=["evaluate", "{R}", "{R}", "{tmp}/map.txt", "--gt", "{tmp}/pairs.txt"], exit=3,
          stderr="line 501: source vertex 3 already has the true target 3 on line 4, and here 7"),
+    dict(name="a folder as MAP is an input error", setup=_bad_inputs,
+         argv=["evaluate", "{R}", "{B}", "{tmp}/folder", "--gt", "identity"], exit=3, stderr="folder"),
+    dict(name="a --gt of bytes that are no text is an input error", setup=_bad_inputs,
+         argv=["evaluate", "{R}", "{R}", "{tmp}/bytes.txt", "--gt", "{tmp}/bytes.txt"], exit=3,
+         stderr="not a text file"),
+    dict(name="a folder as --landmarks is an input error", setup=_bad_inputs,
+         argv=["match", "{R}", "{B}", "-o", "{tmp}/m.txt", "--landmarks", "{tmp}/folder"], exit=3,
+         stderr="is a folder", check=lambda tmp: "a map was written" if (tmp / "m.txt").exists() else None),
+    dict(name="--landmarks-vts of bytes that are no text is an input error", setup=_bad_inputs,
+         argv=["match", "{R}", "{B}", "-o", "{tmp}/m.txt", "--landmarks-vts", "{tmp}/bytes.vts", "{tmp}/one.vts"],
+         exit=3, stderr="must be plain text",
+         check=lambda tmp: "a map was written" if (tmp / "m.txt").exists() else None),
+    # --method icp has no alternative map, which is found after the match (exit 2): the --gt must be refused first
+    dict(name="match --gt is read and checked before the work", setup=_bad_inputs,
+         argv=["match", "{R}", "{B}", "-o", "{tmp}/m.txt", "--method", "icp", "--alternative-out", "{tmp}/alt.txt",
+               "--report", "{tmp}/r.html", "--gt", "{tmp}/far.txt"], exit=3,
+         stderr="names target vertex 999999, but the target mesh has 1000 vertices",
+         check=lambda tmp: _left(tmp, "folder", "bytes.txt", "bytes.vts", "one.vts", "far.txt")),
 ]

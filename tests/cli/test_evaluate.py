@@ -193,3 +193,20 @@ def test_evaluate_refuses_a_truth_with_two_targets_for_a_vertex_and_a_wrapped_ui
     err = capsys.readouterr().err
     assert "huge.npy: entry 3 is 18446744073709551615, too large for a vertex index" in err
     assert err.count("\n") == 1
+
+
+@pytest.mark.parametrize("which", ["MAP", "--gt", "--sym"])
+def test_evaluate_says_an_unreadable_map_or_truth_with_exit_3(tube_files_for_evaluation, tmp_path, capsys,
+                                                              no_read_permission, which):
+    # no read permission was an internal error, exit 1 (issue 31, item 13)
+    folder, src, tgt = tube_files_for_evaluation
+    locked = tmp_path / "locked.txt"
+    locked.write_text((folder / "truth.txt").read_text())
+    no_read_permission("locked.txt")
+    truth = str(folder / "truth.txt")
+    args = {"MAP": [str(locked), "--gt", truth], "--gt": [truth, "--gt", str(locked)],
+            "--sym": [truth, "--gt", truth, "--sym", str(locked)]}[which]
+    assert main(["evaluate", src, tgt, *args]) == 3
+    err = capsys.readouterr().err
+    assert err.startswith("meshcorr: error: Cannot read the") and str(locked) in err and "Permission denied" in err
+    assert err.count("\n") == 1

@@ -167,3 +167,49 @@ def test_stdout_on_a_full_disk_is_said_and_exit_3(tube_files_with_truth, output)
     assert proc.returncode == 3, proc.stderr
     assert "Cannot write stdout" in proc.stderr and "the disk is full" in proc.stderr
     assert "Traceback" not in proc.stderr and "Exception ignored" not in proc.stderr
+
+
+def _no_work(monkeypatch):
+    """Make the match itself fail loudly: what is tested must be found before it."""
+    import meshcorr
+    import meshcorr.pipeline.run
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("match ran")
+
+    monkeypatch.setattr(meshcorr, "match", no_work)  # first: see tests/cli/test_reliability.py
+    monkeypatch.setattr(meshcorr.pipeline.run, "match", no_work)
+
+
+#: What each bad file holds, by problem and by kind (a text file of pairs, a .vts file).
+BAD_FILES = {"no permission": {".txt": b"1 2\n", ".vts": b"1\n"}, "not text": {".txt": b"1 \xff\n", ".vts": b"\xff\n"},
+             "out of range": {".txt": b"1 999999\n"}}
+
+
+@pytest.mark.parametrize("option", [["--landmarks", "{f}"], ["--landmarks-vts", "{f}", "{v}"],
+                                    ["--report", "{r}", "--gt", "{f}"]])
+@pytest.mark.parametrize("problem", ["no permission", "a folder", "not text", "out of range"])
+def test_unreadable_landmarks_and_truth_are_input_errors_before_the_work(tube_files_with_truth, tmp_path, capsys,
+                                                                         monkeypatch, no_read_permission, option,
+                                                                         problem):
+    # exit 1 (internal error) for an unreadable file; a bad --gt was said only after the whole match (issue 31,
+    # item 13). Landmarks out of range are the pipeline's to refuse (tests/cli/test_match_landmarks.py).
+    if problem == "out of range" and option[0] != "--report":
+        pytest.skip("landmarks are checked against the meshes by the pipeline")
+    src, tgt, _ = tube_files_with_truth
+    _no_work(monkeypatch)
+    suffix = ".vts" if "--landmarks-vts" in option else ".txt"
+    bad = tmp_path / f"bad{suffix}"
+    if problem == "a folder":
+        bad.mkdir()
+    else:
+        bad.write_bytes(BAD_FILES[problem][suffix])
+    if problem == "no permission":
+        no_read_permission(bad.name)
+    (tmp_path / "good.vts").write_text("1\n")
+    args = [arg.format(f=bad, v=tmp_path / "good.vts", r=tmp_path / "r.html") for arg in option]
+    code = main(["match", src, tgt, "-o", str(tmp_path / "m.txt"), *args])
+    err = capsys.readouterr().err
+    assert code == 3, err
+    assert str(bad) in err and "Traceback" not in err and "internal error" not in err
+    assert not (tmp_path / "m.txt").exists() and not (tmp_path / "r.html").exists()

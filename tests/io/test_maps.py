@@ -71,3 +71,11 @@ def test_a_uint64_entry_too_large_for_int64_is_refused_not_wrapped_to_unmapped(t
     np.save(tmp_path / "huge.npy", np.array([3, 2 ** 64 - 1, 2], dtype=np.uint64))
     with pytest.raises(ParameterError, match=r"huge.npy: entry 1 is 18446744073709551615, too large .* int64"):
         read_map(tmp_path / "huge.npy")
+
+
+def test_an_unreadable_map_file_is_an_input_error(tmp_path, no_read_permission):
+    # a PermissionError was an internal error of the command line, exit 1 (issue 31, item 13)
+    write_map(tmp_path / "locked.txt", np.arange(3))
+    no_read_permission("locked.txt")
+    with pytest.raises(ParameterError, match=r"Cannot read the map file .*locked.txt \(MAP\): Permission denied"):
+        read_map(tmp_path / "locked.txt", name="MAP")

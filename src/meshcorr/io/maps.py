@@ -67,8 +67,8 @@ def read_map(path, *, name: str | None = None) -> np.ndarray:
     Raises
     ------
     InputError
-        If the file is missing or does not hold a 1-D array of integers
-        (a :class:`ParameterError`).
+        If the file is missing or unreadable, or does not hold a 1-D array
+        of integers that fit an int64 (a :class:`ParameterError`).
     """
     path = Path(path)
     if not path.is_file():
@@ -96,6 +96,10 @@ def read_map(path, *, name: str | None = None) -> np.ndarray:
     except UnicodeDecodeError as exc:
         raise InputError(f"{path}: not a text file (byte {exc.start} is not ASCII); a map file is text with "
                          "one integer per line, or a .npy array.") from exc
+    except OSError as exc:  # no read permission; a folder or a file gone since the check
+        which = f" ({name})" if name else ""
+        raise InputError(f"Cannot read the map file {path}{which}: {exc.strerror or exc}. Check that it is a "
+                         "file you may read.") from exc
     numbered = [(i + 1, line.strip()) for i, line in enumerate(lines) if line.strip()]
     for number, line in numbered:
         if not re.fullmatch(r"[+-]?\d{1,18}", line):

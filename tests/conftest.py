@@ -45,3 +45,24 @@ def tube_files_with_truth(tmp_path_factory):
     trimesh.Trimesh(shape.vertices, shape.faces, process=False).export(src)
     trimesh.Trimesh(copy.vertices, copy.faces, process=False).export(tgt)
     return str(src), str(tgt), truth
+
+
+@pytest.fixture
+def no_read_permission(monkeypatch):
+    """``no_read_permission(name)``: reading a text file called ``name`` (``Path.read_text``, as the readers of
+    maps, truths and landmarks do) then fails as without read permission. The tests run as root, which may
+    read a chmod-000 file."""
+    import errno
+    import os
+    import pathlib
+
+    names = set()
+    read_text = pathlib.Path.read_text
+
+    def refuse(self, *args, **kwargs):
+        if self.name in names:
+            raise PermissionError(errno.EACCES, os.strerror(errno.EACCES), str(self))
+        return read_text(self, *args, **kwargs)
+
+    monkeypatch.setattr(pathlib.Path, "read_text", refuse)
+    return names.add

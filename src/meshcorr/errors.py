@@ -48,6 +48,14 @@ class OutputError(ParameterError):
     """An output cannot be written where asked (no folder, no permission, an input's path)."""
 
 
+class DiskFullError(OutputError):
+    """An output could not be written because the disk, or the user's quota, is full (ENOSPC, EDQUOT).
+
+    No usage error, although an :class:`OutputError`: the command line exits with code 3 (input or
+    output data), not 2.
+    """
+
+
 class PreparedShapeError(MeshcorrError, ValueError):
     """A prepared shape (or cache file) was made for another mesh, other settings or another version."""
 

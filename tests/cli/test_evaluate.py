@@ -174,3 +174,39 @@ def test_bench_input_errors(dataset, tmp_path, capsys):
     (dataset / "test_pairs.txt").write_text("tube0 tube1 extra\n")
     with pytest.raises(ParameterError, match="line 1: expected two shape names"):
         benchmark.load_dataset(dataset)
+
+
+def test_evaluate_refuses_a_truth_with_two_targets_for_a_vertex_and_a_wrapped_uint64_map(
+        tube_files_for_evaluation, tmp_path, capsys):
+    # both were taken: 129 points scored on a 128-vertex source; 2**64 - 1 read as -1 (issue 31, item 7)
+    folder, src, tgt = tube_files_for_evaluation
+    truth = np.loadtxt(folder / "truth.txt", dtype=np.int64)
+    pairs = [f"{i} {t}" for i, t in enumerate(truth)]
+    (tmp_path / "pairs.txt").write_text("\n".join(pairs + [f"5 {truth[6]}"]) + "\n")
+    assert main(["evaluate", src, tgt, str(folder / "truth.txt"), "--gt", str(tmp_path / "pairs.txt")]) == 3
+    err = capsys.readouterr().err
+    assert f"pairs.txt, line {len(truth) + 1}: source vertex 5 already has the true target {truth[5]} on line 6" in err
+    huge = truth.astype(np.uint64)
+    huge[3] = np.uint64(2 ** 64 - 1)
+    np.save(tmp_path / "huge.npy", huge)
+    assert main(["evaluate", src, tgt, str(tmp_path / "huge.npy"), "--gt", str(folder / "truth.txt")]) == 3
+    err = capsys.readouterr().err
+    assert "huge.npy: entry 3 is 18446744073709551615, too large for a vertex index" in err
+    assert err.count("\n") == 1
+
+
+@pytest.mark.parametrize("which", ["MAP", "--gt", "--sym"])
+def test_evaluate_says_an_unreadable_map_or_truth_with_exit_3(tube_files_for_evaluation, tmp_path, capsys,
+                                                              no_read_permission, which):
+    # no read permission was an internal error, exit 1 (issue 31, item 13)
+    folder, src, tgt = tube_files_for_evaluation
+    locked = tmp_path / "locked.txt"
+    locked.write_text((folder / "truth.txt").read_text())
+    no_read_permission("locked.txt")
+    truth = str(folder / "truth.txt")
+    args = {"MAP": [str(locked), "--gt", truth], "--gt": [truth, "--gt", str(locked)],
+            "--sym": [truth, "--gt", truth, "--sym", str(locked)]}[which]
+    assert main(["evaluate", src, tgt, *args]) == 3
+    err = capsys.readouterr().err
+    assert err.startswith("meshcorr: error: Cannot read the") and str(locked) in err and "Permission denied" in err
+    assert err.count("\n") == 1

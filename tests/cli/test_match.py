@@ -107,3 +107,109 @@ def test_console_script_runs_as_a_process(tube_files_with_truth, tmp_path):
     bad = subprocess.run([sys.executable, "-m", "meshcorr", "match", src, "nope.obj", "-o", str(out)],
                          capture_output=True, text=True, timeout=120)
     assert bad.returncode == 3 and "Traceback" not in bad.stderr  # bad input data
+
+
+@pytest.mark.parametrize("option", ["--alternative-out", "--report"])
+def test_an_output_other_than_the_map_is_not_written_to_a_file_named_dash(tube_files_with_truth, tmp_path,
+                                                                          capsys, monkeypatch, option):
+    # it wrote a file named '-' (issue 31, item 6); only -o goes to stdout
+    src, tgt, _ = tube_files_with_truth
+    monkeypatch.chdir(tmp_path)
+    assert main(["match", src, tgt, "-o", "m.txt", option, "-", "--reorder", "greedy"]) == 2
+    err = capsys.readouterr().err
+    assert f"Cannot write {option} to stdout" in err and "./-" in err
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("output", ["newdir/", "file.txt/", "folder/", "folder"])
+def test_an_output_naming_a_folder_is_refused_and_nothing_written(tube_files_with_truth, tmp_path, capsys,
+                                                                  monkeypatch, output):
+    # 'newdir/' wrote a file 'newdir', 'file.txt/' replaced file.txt (issue 31, item 6)
+    src, tgt, _ = tube_files_with_truth
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "file.txt").write_text("mine\n")
+    (tmp_path / "folder").mkdir()
+    for flag in ("-o", "--alternative-out", "--report"):
+        args = ["-o", output] if flag == "-o" else ["-o", "m.txt", flag, output]
+        assert main(["match", src, tgt, *args, "--reorder", "greedy"]) == 2
+        err = capsys.readouterr().err
+        assert "folder" in err and output in err and "Traceback" not in err
+        assert sorted(os.listdir(tmp_path)) == ["file.txt", "folder"] and not os.listdir(tmp_path / "folder")
+        assert (tmp_path / "file.txt").read_text() == "mine\n"
+
+
+@pytest.mark.parametrize("name", ["m.txt", "m.npy"])
+def test_a_full_disk_is_said_with_the_path_and_exit_3(tube_files_with_truth, tmp_path, capsys, monkeypatch, name):
+    # it was "internal error ... report it", exit 1 (issue 31, item 11)
+    import errno
+
+    src, tgt, _ = tube_files_with_truth
+    out = tmp_path / name
+
+    def full(fd):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(os, "fsync", full)
+    code = main(["match", src, tgt, "-o", str(out), "--reorder", "greedy", "-q"])
+    err = capsys.readouterr().err
+    assert code == 3 and "internal error" not in err and "Traceback" not in err
+    assert f"Cannot write {out}: the disk is full" in err
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full (Linux)")
+@pytest.mark.parametrize("output", [["--json"], ["-o", "-"]])
+def test_stdout_on_a_full_disk_is_said_and_exit_3(tube_files_with_truth, output):
+    src, tgt, _ = tube_files_with_truth
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "meshcorr", "match", src, tgt, *output, "-q",
+                               "--reorder", "greedy"], stdout=full, stderr=subprocess.PIPE, text=True, timeout=120)
+    assert proc.returncode == 3, proc.stderr
+    assert "Cannot write stdout" in proc.stderr and "the disk is full" in proc.stderr
+    assert "Traceback" not in proc.stderr and "Exception ignored" not in proc.stderr
+
+
+def _no_work(monkeypatch):
+    """Make the match itself fail loudly: what is tested must be found before it."""
+    import meshcorr
+    import meshcorr.pipeline.run
+
+    def no_work(*args, **kwargs):
+        raise AssertionError("match ran")
+
+    monkeypatch.setattr(meshcorr, "match", no_work)  # first: see tests/cli/test_reliability.py
+    monkeypatch.setattr(meshcorr.pipeline.run, "match", no_work)
+
+
+#: What each bad file holds, by problem and by kind (a text file of pairs, a .vts file).
+BAD_FILES = {"no permission": {".txt": b"1 2\n", ".vts": b"1\n"}, "not text": {".txt": b"1 \xff\n", ".vts": b"\xff\n"},
+             "out of range": {".txt": b"1 999999\n"}}
+
+
+@pytest.mark.parametrize("option", [["--landmarks", "{f}"], ["--landmarks-vts", "{f}", "{v}"],
+                                    ["--report", "{r}", "--gt", "{f}"]])
+@pytest.mark.parametrize("problem", ["no permission", "a folder", "not text", "out of range"])
+def test_unreadable_landmarks_and_truth_are_input_errors_before_the_work(tube_files_with_truth, tmp_path, capsys,
+                                                                         monkeypatch, no_read_permission, option,
+                                                                         problem):
+    # exit 1 (internal error) for an unreadable file; a bad --gt was said only after the whole match (issue 31,
+    # item 13). Landmarks out of range are the pipeline's to refuse (tests/cli/test_match_landmarks.py).
+    if problem == "out of range" and option[0] != "--report":
+        pytest.skip("landmarks are checked against the meshes by the pipeline")
+    src, tgt, _ = tube_files_with_truth
+    _no_work(monkeypatch)
+    suffix = ".vts" if "--landmarks-vts" in option else ".txt"
+    bad = tmp_path / f"bad{suffix}"
+    if problem == "a folder":
+        bad.mkdir()
+    else:
+        bad.write_bytes(BAD_FILES[problem][suffix])
+    if problem == "no permission":
+        no_read_permission(bad.name)
+    (tmp_path / "good.vts").write_text("1\n")
+    args = [arg.format(f=bad, v=tmp_path / "good.vts", r=tmp_path / "r.html") for arg in option]
+    code = main(["match", src, tgt, "-o", str(tmp_path / "m.txt"), *args])
+    err = capsys.readouterr().err
+    assert code == 3, err
+    assert str(bad) in err and "Traceback" not in err and "internal error" not in err
+    assert not (tmp_path / "m.txt").exists() and not (tmp_path / "r.html").exists()

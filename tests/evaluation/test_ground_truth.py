@@ -131,3 +131,13 @@ def test_identity_and_spec_errors():
         load_ground_truth(["a", "b", "c"], n_source=3, n_target=3)
     with pytest.raises(ParameterError, match="as many source as target"):
         GroundTruth([0, 1], [0])
+
+
+def test_a_file_of_pairs_names_each_source_vertex_once(tmp_path):
+    # a second target for a source vertex was taken: 501 points scored on a 500-vertex source (issue 31, item 7)
+    with pytest.raises(InputError, match=r"two.txt, line 4: source vertex 0 already has the true target 4 on "
+                                         r"line 1, and here 2; give each source vertex one true target"):
+        read_pairs(write(tmp_path / "two.txt", ["0 4", "1 1", "# comment", "0 2"]))
+    with pytest.raises(InputError, match=r"again.txt, line 3: the pair '1 1' is also on line 2; give each pair once"):
+        read_pairs(write(tmp_path / "again.txt", ["0 4", "1 1", "1 1"]))
+    assert len(read_pairs(write(tmp_path / "one.txt", ["0 4", "1 4"]))) == 2  # two sources on one target: fine

@@ -62,3 +62,20 @@ def test_write_map_rejects_non_integer(tmp_path):
     with pytest.raises(ParameterError, match="1-D integer array"):
         write_map(tmp_path / "m.txt", np.array([1.5, 2.0]))
     assert os.listdir(tmp_path) == []
+
+
+def test_a_uint64_entry_too_large_for_int64_is_refused_not_wrapped_to_unmapped(tmp_path):
+    # 2**64 - 1 became -1, "unmapped" (issue 31, item 7)
+    np.save(tmp_path / "small.npy", np.array([3, 0, 2], dtype=np.uint64))
+    np.testing.assert_array_equal(read_map(tmp_path / "small.npy"), [3, 0, 2])
+    np.save(tmp_path / "huge.npy", np.array([3, 2 ** 64 - 1, 2], dtype=np.uint64))
+    with pytest.raises(ParameterError, match=r"huge.npy: entry 1 is 18446744073709551615, too large .* int64"):
+        read_map(tmp_path / "huge.npy")
+
+
+def test_an_unreadable_map_file_is_an_input_error(tmp_path, no_read_permission):
+    # a PermissionError was an internal error of the command line, exit 1 (issue 31, item 13)
+    write_map(tmp_path / "locked.txt", np.arange(3))
+    no_read_permission("locked.txt")
+    with pytest.raises(ParameterError, match=r"Cannot read the map file .*locked.txt \(MAP\): Permission denied"):
+        read_map(tmp_path / "locked.txt", name="MAP")

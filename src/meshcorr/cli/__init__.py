@@ -14,6 +14,7 @@ import warnings
 from .. import __version__
 from ..errors import MeshcorrError, MeshWarning
 from ..io import quiet_trimesh
+from ..io.files import DISK_FULL, disk_full_message
 from . import batch as _batch
 from . import bench as _bench
 from . import cache as _cache
@@ -106,11 +107,30 @@ def main(argv: list[str] | None = None) -> int:
             _silence_stdout()
             return EXIT_BROKEN_PIPE
         except Exception as exc:  # noqa: BLE001 - the last line of defence against tracebacks
+            if isinstance(exc, OSError) and exc.errno in DISK_FULL:  # stdout, or a file not written atomically
+                print(f"meshcorr: error: {_disk_full(exc)}", file=sys.stderr)
+                return EXIT_INPUT
             if args is not None and args.debug:
                 raise
             print(f"meshcorr: internal error: {type(exc).__name__}: {exc}. "
                   "Run again with --debug for the traceback and report it.", file=sys.stderr)
             return EXIT_ERROR
+
+
+def _disk_full(exc: OSError) -> str:
+    """The message of a full disk met outside :func:`meshcorr.io.atomic_write` (which names its file).
+
+    Such a write error names no file: it is stdout (``--json``, ``-o -`` into a file on a full disk)
+    or a temporary file of a library. Data still waiting for stdout is dropped if it does not fit
+    either, so that the interpreter's final flush does not fail again.
+    """
+    if exc.filename is not None:
+        return disk_full_message(exc.filename, exc)
+    try:
+        sys.stdout.flush()
+    except (OSError, ValueError):
+        _silence_stdout()
+    return disk_full_message("stdout (or a temporary file)", exc, removed=False)
 
 
 def _silence_stdout() -> None:

@@ -146,7 +146,7 @@ def _check_outputs(args, outputs: dict) -> None:
     from ..io import check_outputs
 
     check_outputs(outputs, {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map,
-                            "--to-map": getattr(args, "to_map", None)})
+                            "--to-map": getattr(args, "to_map", None)}, stdout=("-o",))
 
 
 def run_texture(args) -> int:

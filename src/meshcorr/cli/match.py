@@ -225,8 +225,9 @@ def run(args) -> int:
     inputs.update({"--landmarks": args.landmarks_file} if args.landmarks_file else {})
     inputs.update({f"--landmarks-vts {v}": v for v in args.landmarks_vts or ()})
     check_outputs({"-o": args.output, "--alternative-out": args.alternative_out, "--report": args.report},
-                  inputs)
+                  inputs, stdout=("-o",))
     landmarks, origin = _read_landmarks(args)
+    report_inputs = _read_truth(args)  # a bad --gt is said before the work, not after it
     if args.verbose:
         print(f"meshcorr: matching {args.source} -> {args.target}", file=sys.stderr)
     with _landmark_lines(landmarks, origin):
@@ -243,7 +244,7 @@ def run(args) -> int:
         if args.alternative_out:
             write_map(args.alternative_out, result.alternative_map)
         if args.report:
-            _write_report(args, result.map, summary)
+            _write_report(args, result.map, summary, *report_inputs)
     if args.output == "-":
         print_map(result.map)
     if args.json:
@@ -333,20 +334,30 @@ def _landmark_lines(pairs, origin):
         raise InputError(f"{files[column]}, line {lines[row, column]}: {reason}") from None
 
 
-def _write_report(args, mapping, summary: dict) -> None:
-    """The HTML report of ``--report``, with the error curve when ``--gt`` is given."""
+def _read_truth(args):
+    """``((source, target), truth)``: the meshes as the report reads them and ``--gt`` checked against
+    them, before the work; ``(None, None)`` without ``--gt``."""
+    if not args.gt:
+        return None, None
+    from ..evaluation.ground_truth import load_ground_truth
+    from ..io import read_mesh
+
+    meshes = read_mesh(args.source, name=args.source), read_mesh(args.target, name=args.target)
+    return meshes, load_ground_truth(args.gt, n_source=len(meshes[0][0]), n_target=len(meshes[1][0]))
+
+
+def _write_report(args, mapping, summary: dict, meshes=None, truth=None) -> None:
+    """The HTML report of ``--report``, with the error curve when ``truth`` (``--gt``, :func:`_read_truth`)
+    is given; ``meshes`` as read then, else read here."""
     import numpy as np
 
     from ..evaluation.metrics import geodesic_errors
-    from ..evaluation.ground_truth import load_ground_truth
     from ..io import read_mesh
     from ..viz.report import write_report
 
-    source = read_mesh(args.source, name=args.source)
-    target = read_mesh(args.target, name=args.target)
+    source, target = meshes or (read_mesh(args.source, name=args.source), read_mesh(args.target, name=args.target))
     errors = None
-    if args.gt:
-        truth = load_ground_truth(args.gt, n_source=len(source[0]), n_target=len(target[0]))
+    if truth is not None:
         predicted = mapping[truth.source]
         errors = np.full(len(truth.source), np.nan)
         mapped = predicted >= 0

@@ -182,8 +182,8 @@ def read_pairs(path, n_source: int | None = None) -> GroundTruth:
     ------
     ParameterError
         Missing or empty file, a line that is not one or two integers, a
-        mix of one- and two-column lines, or a dense map whose line count is
-        not ``n_source``.
+        mix of one- and two-column lines, a dense map whose line count is
+        not ``n_source``, or a source vertex on two lines of pairs.
     """
     path = Path(path)
     rows = []
@@ -210,7 +210,25 @@ def read_pairs(path, n_source: int | None = None) -> GroundTruth:
         target = table[:, 0]
         source = np.flatnonzero(target >= 0)
         return GroundTruth(source, target[source], str(path))
+    _refuse_repeated_sources(path, table, [number for number, _ in rows])
     return GroundTruth(table[:, 0], table[:, 1], str(path))
+
+
+def _refuse_repeated_sources(path: Path, table: np.ndarray, numbers: list[int]) -> None:
+    """A file of pairs names each source vertex once: a second line for one counted it twice (it
+    scored 501 points on a 500-vertex source), and a second target contradicts the first."""
+    first: dict[int, int] = {}
+    for row, (source, target) in enumerate(table.tolist()):
+        if source not in first:
+            first[source] = row
+            continue
+        earlier = first[source]
+        if table[earlier, 1] == target:
+            raise InputError(f"{path}, line {numbers[row]}: the pair '{source} {target}' is also on line "
+                             f"{numbers[earlier]}; give each pair once.")
+        raise InputError(f"{path}, line {numbers[row]}: source vertex {source} already has the true target "
+                         f"{int(table[earlier, 1])} on line {numbers[earlier]}, and here {target}; give each source "
+                         "vertex one true target vertex.")
 
 
 def load_ground_truth(spec: str | os.PathLike | Sequence[str | os.PathLike], *, n_source: int,

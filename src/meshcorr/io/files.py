@@ -9,6 +9,7 @@ place only once all are written.
 
 from __future__ import annotations
 
+import errno
 import os
 import secrets
 import stat
@@ -17,23 +18,28 @@ from contextvars import ContextVar
 from pathlib import Path
 from typing import BinaryIO, Callable
 
-from ..errors import OutputError
+from ..errors import DiskFullError, OutputError
 
 __all__ = ["atomic_write", "check_outputs", "staged_writes"]
+
+#: The errno values of a full disk or quota: written as :class:`DiskFullError`.
+DISK_FULL = tuple(code for code in (errno.ENOSPC, getattr(errno, "EDQUOT", None)) if code is not None)
 
 #: The (temporary file, target) pairs of the innermost :func:`staged_writes` block, if any.
 _STAGED: ContextVar[list | None] = ContextVar("meshcorr_staged_writes", default=None)
 
 
-def check_outputs(outputs: dict, inputs: dict | None = None) -> None:
+def check_outputs(outputs: dict, inputs: dict | None = None, *, stdout: tuple = ()) -> None:
     """Refuse, before any work, output paths that cannot or must not be written.
 
-    Checked for each output: it is not the path of an input (compared as
-    real paths, and as the same file where both exist), no two outputs share
-    a path, its folder exists and a file can be created there (a probe file
-    is made and removed: this catches read-only file systems and ``/proc``),
-    and an existing file there is a regular file that may be replaced (not
-    read-only, not immutable). ``"-"`` (stdout) and ``None`` are skipped.
+    Checked for each output: it is not ``"-"`` unless it may go to stdout,
+    its path does not end with a path separator (a folder's name), it is not
+    the path of an input (compared as real paths, and as the same file where
+    both exist), no two outputs share a path, its folder exists and a file
+    can be created there (a probe file is made and removed: this catches
+    read-only file systems and ``/proc``), and an existing file there is a
+    regular file that may be replaced (not read-only, not immutable).
+    ``None`` is skipped.
 
     Parameters
     ----------
@@ -41,6 +47,9 @@ def check_outputs(outputs: dict, inputs: dict | None = None) -> None:
         What each output is (``"-o"``, ``"--report"``, ...) and where it goes.
     inputs : dict of str -> path, optional
         The input files, named the same way.
+    stdout : tuple of str
+        The outputs that ``"-"`` sends to stdout (e.g. ``("-o",)``); for
+        any other, ``"-"`` is refused (it wrote a file named ``-``).
 
     Raises
     ------
@@ -50,8 +59,13 @@ def check_outputs(outputs: dict, inputs: dict | None = None) -> None:
     inputs = {what: Path(path) for what, path in (inputs or {}).items() if path is not None}
     seen: dict[str, str] = {}
     for what, path in outputs.items():
-        if path is None or str(path) == "-":
+        if path is None or (str(path) == "-" and what in stdout):
             continue
+        if str(path) == "-":
+            others = f" (only {' and '.join(stdout)} can)" if stdout else ""
+            raise OutputError(f"Cannot write {what} to stdout ('-'): it is written to a file only{others}. "
+                              "Give a file path (./- for a file named '-').")
+        refuse_folder_name(path, what)
         path = Path(path)
         real = os.path.realpath(path)
         for source, input_path in inputs.items():
@@ -81,6 +95,26 @@ def check_outputs(outputs: dict, inputs: dict | None = None) -> None:
         except OSError as exc:
             raise OutputError(f"Cannot write {what} {path}: no file can be created in {folder} "
                               f"({exc.strerror}). Give a path in a writable folder.") from exc
+
+
+def refuse_folder_name(path, what: str = "the output") -> None:
+    """Raise :class:`OutputError` if ``path`` ends with a path separator: it names a folder, not a file.
+
+    ``Path("maps/")`` drops the separator, so ``-o maps/`` wrote a file ``maps`` and ``-o file.txt/``
+    replaced ``file.txt``.
+    """
+    text = os.fspath(path)
+    text = text.decode(errors="replace") if isinstance(text, bytes) else text
+    if not text.endswith(tuple(sep for sep in (os.sep, os.altsep) if sep)):
+        return
+    start = f"Cannot write {what} {text}: a path ending with '{text[-1]}' names a folder"
+    folder = text.rstrip(os.sep + (os.altsep or "")) or text
+    if os.path.isdir(folder):
+        raise OutputError(f"{start}. Give a file name in it, e.g. {text}map.txt.")
+    if os.path.exists(folder):
+        raise OutputError(f"{start}, and {folder} is a file. Give the file path without the trailing '{text[-1]}'.")
+    raise OutputError(f"{start}, and there is no folder {folder}. Give a file path without the trailing "
+                      f"'{text[-1]}', or create the folder and give a file name in it, e.g. {text}map.txt.")
 
 
 def sibling(path: Path, kind: str) -> Path:
@@ -129,6 +163,17 @@ def staged_writes():
         raise
 
 
+def disk_full_message(path, exc: OSError, *, removed: bool = True) -> str:
+    """The words of a full disk (``exc.errno`` in :data:`DISK_FULL`) while writing ``path``.
+
+    ``removed``: the partial file was removed (:func:`atomic_write`); False for a stream such as stdout.
+    """
+    what = "the disk quota is exceeded" if exc.errno != errno.ENOSPC else "the disk is full"
+    left = "nothing was left of it" if removed else "what was written of it is incomplete"
+    return (f"Cannot write {path}: {what} ({exc.strerror or os.strerror(exc.errno)}); {left}. "
+            "Free some space (or write to another disk) and run again.")
+
+
 def _replace(temp: Path, path: Path) -> None:
     try:
         os.replace(temp, path)
@@ -156,9 +201,14 @@ def atomic_write(path, writer: Callable[[BinaryIO], object]) -> None:
     Raises
     ------
     OutputError
-        If the directory of ``path`` does not exist or the file cannot be
-        created there (a :class:`ParameterError`).
+        If ``path`` ends with a path separator, the directory of ``path``
+        does not exist or the file cannot be created there (a
+        :class:`ParameterError`).
+    DiskFullError
+        If the disk or the quota is full (``ENOSPC``, ``EDQUOT``): an
+        :class:`OutputError` naming ``path``; nothing is left of the file.
     """
+    refuse_folder_name(path)
     path = Path(path)
     directory = path.parent
     if not directory.is_dir():
@@ -174,6 +224,11 @@ def atomic_write(path, writer: Callable[[BinaryIO], object]) -> None:
             writer(file)
             file.flush()
             os.fsync(file.fileno())
+    except OSError as exc:
+        temp.unlink(missing_ok=True)
+        if exc.errno in DISK_FULL:
+            raise DiskFullError(disk_full_message(path, exc)) from exc
+        raise
     except BaseException:
         temp.unlink(missing_ok=True)
         raise

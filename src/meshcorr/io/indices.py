@@ -19,15 +19,19 @@ __all__ = ["index_fields", "read_index_lines"]
 def read_index_lines(path: Path, kind: str = "ground-truth") -> list[tuple[int, str]]:
     """The non-blank lines of a plain-text index file, ``#`` comments removed, with their numbers.
 
-    Raises :class:`InputError` naming ``kind`` for a missing or non-text file;
-    an empty list for a file with no data lines.
+    Raises :class:`InputError` naming ``kind`` for a missing, unreadable (no
+    permission, a folder) or non-text file; an empty list for a file with no data lines.
     """
     if not path.is_file():
-        raise InputError(f"No such {kind} file: {path}" if not path.exists() else f"Not a file: {path}")
+        raise InputError(f"No such {kind} file: {path}" if not path.exists()
+                         else f"Not a file: {path} is a folder (or a device); give the {kind} file.")
     try:
         text = path.read_text(encoding="ascii")
     except UnicodeDecodeError as exc:
-        raise InputError(f"{path}: a {kind} file must be plain text.") from exc
+        raise InputError(f"{path}: a {kind} file must be plain text (byte {exc.start} is not ASCII).") from exc
+    except OSError as exc:  # no read permission; a folder or a file gone since the check
+        raise InputError(f"Cannot read the {kind} file {path}: {exc.strerror or exc}. Check that it is a file "
+                         "you may read.") from exc
     lines = [(number, line.split("#", 1)[0].strip()) for number, line in enumerate(text.splitlines(), 1)]
     return [(number, line) for number, line in lines if line]
 

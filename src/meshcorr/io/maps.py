@@ -67,8 +67,8 @@ def read_map(path, *, name: str | None = None) -> np.ndarray:
     Raises
     ------
     InputError
-        If the file is missing or does not hold a 1-D array of integers
-        (a :class:`ParameterError`).
+        If the file is missing or unreadable, or does not hold a 1-D array
+        of integers that fit an int64 (a :class:`ParameterError`).
     """
     path = Path(path)
     if not path.is_file():
@@ -85,12 +85,21 @@ def read_map(path, *, name: str | None = None) -> np.ndarray:
                 f"{path}: a map must be a 1-D integer array; got shape {mapping.shape} "
                 f"and dtype {mapping.dtype}."
             )
+        huge = np.flatnonzero(mapping > np.iinfo(np.int64).max)  # uint64: it wrapped to negatives (-1: unmapped)
+        if huge.size:
+            raise InputError(f"{path}: entry {int(huge[0])} is {int(mapping[huge[0]])}, too large for a vertex "
+                             f"index (a {mapping.dtype} array). Write the map as int64, with -1 for an unmapped "
+                             "vertex.")
         return mapping.astype(np.int64)
     try:
         lines = path.read_text(encoding="ascii").splitlines()
     except UnicodeDecodeError as exc:
         raise InputError(f"{path}: not a text file (byte {exc.start} is not ASCII); a map file is text with "
                          "one integer per line, or a .npy array.") from exc
+    except OSError as exc:  # no read permission; a folder or a file gone since the check
+        which = f" ({name})" if name else ""
+        raise InputError(f"Cannot read the map file {path}{which}: {exc.strerror or exc}. Check that it is a "
+                         "file you may read.") from exc
     numbered = [(i + 1, line.strip()) for i, line in enumerate(lines) if line.strip()]
     for number, line in numbered:
         if not re.fullmatch(r"[+-]?\d{1,18}", line):

@@ -497,7 +497,8 @@ class Correspondence:
         Raises
         ------
         InputError
-            If the file is missing or is no saved result.
+            If the file is missing or is no saved result, or its map is not one integer target
+            vertex (or -1) per source vertex of the meshes saved with it.
         """
         from ..io import read_npz
 
@@ -518,10 +519,45 @@ class Correspondence:
                                         n_original=int(arrays.pop(f"{role}_mesh_n_original")))
             eigenvalues = {key[len("eigenvalues_"):]: arrays.pop(key) for key in list(arrays)
                            if key.startswith("eigenvalues_")}
+            for name in ("map", "alternative_map"):
+                if name in arrays:
+                    arrays[name] = _checked_map(path, name, arrays[name], meshes)
             return cls(**arrays, **rest, **meshes, eigenvalues=eigenvalues)
+        except InputError:
+            raise
         except (ValueError, KeyError, TypeError, AttributeError, UnicodeDecodeError) as exc:  # JSONDecodeError too
             raise InputError(f"{path} is not a saved meshcorr result (damaged or from another program: "
                              f"{type(exc).__name__}: {exc}). Save the result again.") from None
+
+
+def _checked_map(path, name: str, mapping: np.ndarray, meshes: dict) -> np.ndarray:
+    """``(n_source,)`` int64: a loaded map checked against the vertex counts recorded beside it.
+
+    One integer target vertex per source vertex, each in ``[-1, n_target)``; the counts are the
+    saved meshes' (``n_original``) where the file holds them. Anything else is refused with an
+    :class:`InputError` naming the file, the problem and the fix (:meth:`Correspondence.load`).
+    """
+    n_source = meshes["source"].n_original if "source" in meshes else None
+    n_target = meshes["target"].n_original if "target" in meshes else None
+    fix = "The file was changed or written by another program: save the result again with Correspondence.save."
+    where = f"{path} is not a usable saved meshcorr result: its {name}"
+    if mapping.ndim != 1:
+        raise InputError(f"{where} has shape {mapping.shape}, but a map is 1-D: one target vertex per source "
+                         f"vertex. {fix}")
+    if not np.issubdtype(mapping.dtype, np.integer):
+        raise InputError(f"{where} holds {mapping.dtype} values, but a map holds whole target vertex indices "
+                         f"(integers; -1 where unmapped). {fix}")
+    if n_source is not None and len(mapping) != n_source:
+        raise InputError(f"{where} has {len(mapping)} entries, but the source mesh saved with it has {n_source} "
+                         f"vertices: a map needs one entry per source vertex. {fix}")
+    too_high = mapping > np.iinfo(np.int64).max if n_target is None else mapping >= n_target
+    bad = too_high | (mapping < -1) if mapping.dtype.kind == "i" else too_high
+    if bad.any():
+        entry = int(np.flatnonzero(bad)[0])
+        allowed = (f"-1..{n_target - 1}, the saved target mesh's {n_target} vertices (-1: unmapped)"
+                   if n_target is not None else "-1 (unmapped) or a target vertex index >= 0")
+        raise InputError(f"{where} entry {entry} is {int(mapping[entry])}, outside {allowed}. {fix}")
+    return mapping.astype(np.int64)
 
 
 def _json_default(value):

@@ -12,7 +12,9 @@ which the field refers to. A Settings is checked when it is made
 parameter must be an int <= 10. Got 12 instead."): an option changed from
 its default that the chosen method does not use raises
 :class:`~meshcorr.errors.ParameterError` naming it
-(:func:`meshcorr.pipeline.methods.reject_inapplicable`), a partial-mode
+(:func:`meshcorr.pipeline.methods.reject_inapplicable`), as does an option
+that another makes certain to be ignored (``refine_k`` with
+``refine=False``, ``n_samples`` with ``mode="dense"``, ...), a partial-mode
 option that does not go with the others raises
 :class:`~meshcorr.errors.PartialityError`. Checks that need the meshes
 (landmark indices, anchors against the vertex count) are left to the run.
@@ -278,6 +280,7 @@ class Settings:
             parse_memory(self.max_memory)  # a size it cannot read raises here (the run resolves it)
         check_choice("symmetry", self.symmetry, SYMMETRY_MODES)
         check_choice("anchor_scale", self.anchor_scale, ANCHOR_SCALES)
+        _reject_ignored(self.changed(), bijective=self.bijective)
         if has_pairs and self.symmetry != "auto":
             raise ParameterError(f"Landmarks settle the left/right choice in the whole-map choice "
                                  f"(symmetry='auto'); symmetry={self.symmetry!r} (--symmetry {self.symmetry}) "
@@ -323,6 +326,34 @@ class Settings:
         if out["landmarks"] is not None:
             out["landmarks"] = np.asarray(out["landmarks"]).tolist()
         return out
+
+
+def _reject_ignored(changed: dict, *, bijective: bool) -> None:
+    """Refuse an option changed from its default that another option makes certain to be ignored.
+
+    ``n_samples`` with ``mode="dense"``, ``max_memory`` with ``mode="scalable"`` (without
+    ``bijective``, whose cost matrix it bounds), ``refine_k`` with ``refine=False``, ``n_control`` or
+    ``anneal`` with ``icp_iterations=0``: the map would be the same without them. ``mode="auto"`` may
+    resolve to either mode at run time, so it goes with both ``n_samples`` and ``max_memory``.
+    """
+    pairs = []
+    if changed.get("mode") == "dense" and "n_samples" in changed:
+        pairs.append(("n_samples", "--samples", "the Nystrom sample count of the scalable mode",
+                      "mode='dense' (--mode dense)", "use mode='scalable' or 'auto'"))
+    if changed.get("mode") == "scalable" and "max_memory" in changed and not bijective:
+        pairs.append(("max_memory", "--max-memory", "the memory the dense mode (or a one-to-one map) may use",
+                      "mode='scalable' (--mode scalable)", "use mode='auto' or 'dense'"))
+    if "refine" in changed and not changed["refine"] and "refine_k" in changed:
+        pairs.append(("refine_k", "--refine-k", "the basis size of the ZoomOut refinement",
+                      "refine=False (--no-refine)", "keep refine=True"))
+    if changed.get("icp_iterations") == 0:
+        pairs += [(name, flag, "a setting of the thin-plate-spline ICP", "icp_iterations=0 (--icp-iterations 0)",
+                   "give icp_iterations > 0") for name, flag in (("n_control", "--control-points"),
+                                                                  ("anneal", "--anneal")) if name in changed]
+    if pairs:
+        name, flag, what, other, instead = pairs[0]
+        raise ParameterError(f"{name}={changed[name]!r} ({flag}) is {what}, which {other} skips: it would be "
+                             f"ignored. Remove {name} ({flag}), or {instead}.")
 
 
 def _coarse_size(value) -> int:

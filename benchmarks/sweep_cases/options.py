@@ -6,6 +6,20 @@ from pathlib import Path
 N_EXAMPLE = 500  # vertices of each bundled example
 
 
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
+
+
+def _scaled(factor: float):
+    """A setup writing both examples with their coordinates times ``factor`` (full precision) as r.off, b.off."""
+    def setup(tmp: Path) -> None:
+        for name, out in (("creature_rest.off", "r.off"), ("creature_bent.off", "b.off")):
+            lines = (EXAMPLES / name).read_text().split("\n")
+            n = int(lines[1].split()[0])
+            lines[2:2 + n] = [" ".join(repr(float(x) * factor) for x in line.split()) for line in lines[2:2 + n]]
+            (tmp / out).write_text("\n".join(lines))
+    return setup
+
+
 def _identity_map(tmp: Path) -> None:
     (tmp / "m.txt").write_text("\n".join(str(i) for i in range(N_EXAMPLE)) + "\n")
 
@@ -16,6 +30,16 @@ def _fmap_file(tmp: Path) -> None:
 
 def _no_map(tmp: Path) -> str | None:
     return "a map was written" if (tmp / "m.txt").exists() else None
+
+
+def _same_map_as_examples(tmp: Path) -> str | None:
+    """The scaled examples' map is the examples' own: their map does not depend on scale."""
+    import subprocess
+    import sys
+
+    subprocess.run([sys.executable, "-m", "meshcorr", "match", str(EXAMPLES / "creature_rest.off"),
+                    str(EXAMPLES / "creature_bent.off"), "-o", str(tmp / "ref.txt"), "-q"], check=True, timeout=120)
+    return None if (tmp / "m.txt").read_text() == (tmp / "ref.txt").read_text() else "another map than the examples'"
 
 
 def _refused(name: str, extra: list, message: str) -> dict:
@@ -42,4 +66,11 @@ CASES = [
     dict(name="fmap --to-map with -k and --seed", setup=_fmap_file,
          argv=["fmap", "{R}", "{B}", "--to-map", "{tmp}/f.npz", "-k", "20", "--seed", "2", "-o", "{tmp}/m.txt"],
          exit=2, stderr="-k 20 and --seed 2", check=_no_map),
+    # item 14: coordinates the numerics cannot take (an internal error near 1e200, "degenerate faces" near 1e-200)
+    dict(name="coordinates near 1e200", setup=_scaled(1e200), argv=["match", "{tmp}/r.off", "{tmp}/b.off", "-o",
+         "{tmp}/m.txt"], exit=3, stderr="coordinates as large as 3.59e+200", check=_no_map),
+    dict(name="coordinates near 1e-200", setup=_scaled(1e-200), argv=["match", "{tmp}/r.off", "{tmp}/b.off", "-o",
+         "{tmp}/m.txt"], exit=3, stderr="a bounding box only 4.86e-200 across", check=_no_map),
+    dict(name="coordinates near 1e-30 give the examples' map", setup=_scaled(1e-30),
+         argv=["match", "{tmp}/r.off", "{tmp}/b.off", "-o", "{tmp}/m.txt"], exit=0, check=_same_map_as_examples),
 ]

@@ -20,6 +20,19 @@ def _scaled(factor: float):
     return setup
 
 
+def _prisms(tmp: Path) -> None:
+    """Two closed hexagonal prisms of 12 vertices (heights 1 and 1.5) as prism.off, prism2.off."""
+    import math
+
+    faces = [[i, (i + 1) % 6, 6 + (i + 1) % 6] for i in range(6)] + [[i, 6 + (i + 1) % 6, 6 + i] for i in range(6)]
+    faces += [[0, t + 1, t] for t in range(1, 5)] + [[6, 6 + t, 7 + t] for t in range(1, 5)]
+    for name, height in (("prism.off", 1.0), ("prism2.off", 1.5)):
+        ring = [(math.cos(i * math.pi / 3), math.sin(i * math.pi / 3)) for i in range(6)]
+        points = [(x, y, 0.0) for x, y in ring] + [(x, y, height) for x, y in ring]
+        (tmp / name).write_text(f"OFF\n12 {len(faces)} 0\n" + "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in points)
+                                + "".join(f"3 {a} {b} {c}\n" for a, b, c in faces))
+
+
 def _identity_map(tmp: Path) -> None:
     (tmp / "m.txt").write_text("\n".join(str(i) for i in range(N_EXAMPLE)) + "\n")
 
@@ -73,4 +86,8 @@ CASES = [
          "{tmp}/m.txt"], exit=3, stderr="a bounding box only 4.86e-200 across", check=_no_map),
     dict(name="coordinates near 1e-30 give the examples' map", setup=_scaled(1e-30),
          argv=["match", "{tmp}/r.off", "{tmp}/b.off", "-o", "{tmp}/m.txt"], exit=0, check=_same_map_as_examples),
+    # item 16: a tiny valid closed mesh (its spline system was singular: LinAlgError, an internal error)
+    dict(name="a 12-vertex hexagonal prism", setup=_prisms,
+         argv=["match", "{tmp}/prism.off", "{tmp}/prism2.off", "-o", "{tmp}/m.txt"], exit=0,
+         check=lambda tmp: None if len((tmp / "m.txt").read_text().split()) == 12 else "no 12-line map"),
 ]

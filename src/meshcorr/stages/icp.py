@@ -132,7 +132,10 @@ def _icp(X, Y, rng, *, max_iter, n_control, anneal, tol, rtol, random_state) -> 
         pairs = order[first]
         if len(pairs) < X.shape[1] + 2:
             break  # too few distinct pairs to fit an affine part; keep the last warp
-        spline = fit_tps(Y[c_match[pairs]], X[control[pairs]], smoothing)
+        try:
+            spline = fit_tps(Y[c_match[pairs]], X[control[pairs]], smoothing)
+        except np.linalg.LinAlgError:  # the pairs span too few dimensions for the affine part (a tiny
+            break  # symmetric mesh: its embedding is flat); keep the last warp
         warped = spline(Y)
         result.spline = spline
         new_dist, new_matches = kdtree_query(cKDTree(warped), X)

@@ -90,4 +90,9 @@ CASES = [
     dict(name="a 12-vertex hexagonal prism", setup=_prisms,
          argv=["match", "{tmp}/prism.off", "{tmp}/prism2.off", "-o", "{tmp}/m.txt"], exit=0,
          check=lambda tmp: None if len((tmp / "m.txt").read_text().split()) == 12 else "no 12-line map"),
+    # item 17: unbounded sizes (processes until the machine gave out; 131 s lowered to n - 1 in silence)
+    dict(name="batch --workers 100000", argv=["batch", "--all-pairs", "{R}", "{B}", "--out", "{tmp}/out",
+                                              "--workers", "100000"], exit=2, stderr="--workers 100000 would start",
+         check=lambda tmp: "an output folder was made" if (tmp / "out").exists() else None),
+    _refused("--refine-k 100000", ["--refine-k", "100000"], "refine_k=100000 (--refine-k) is more than"),
 ]

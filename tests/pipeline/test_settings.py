@@ -5,6 +5,7 @@ import pytest
 
 from meshcorr import Settings
 from meshcorr.errors import ParameterError
+from meshcorr.pipeline.settings import MAX_REFINE_K
 
 
 @pytest.mark.parametrize("options, names", [
@@ -34,3 +35,10 @@ def test_an_option_that_another_makes_ignored_is_refused_naming_both(options, na
 def test_options_that_are_used_are_kept(options):
     settings = Settings(**options)
     assert all(getattr(settings, name) == value for name, value in options.items())
+
+
+def test_refine_k_is_bounded():
+    # 100000 was lowered to n - 1 in silence and took 131 s on a 500-vertex mesh (issue 31, item 17).
+    assert Settings(refine_k=MAX_REFINE_K).refine_k == MAX_REFINE_K
+    with pytest.raises(ParameterError, match=r"refine_k=100000 \(--refine-k\) is more than .* at most 200"):
+        Settings(refine_k=100000)

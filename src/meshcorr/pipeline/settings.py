@@ -54,6 +54,9 @@ __all__ = ["Settings", "SHAPE_SETTINGS", "REFINE_K", "shape_settings", "as_setti
 
 #: The fewest vertices of a coarse copy: fewer blur a hand or a foot into the arm or leg.
 MIN_COARSE_VERTICES = 300
+#: The largest ``refine_k``: ZoomOut's basis grows to it one step at a time, and each step costs more;
+#: 200 is five times the default (a basis larger than a mesh's vertices - 1 is clipped to that).
+MAX_REFINE_K = 200
 #: Settings whose value must be True or False (numpy's too), in the order they are checked.
 _SWITCHES = ("bijective", "shells", "extremities", "oriented_starts", "prealign")
 #: The spectral pipeline's switches that only it checks (with :data:`_SWITCHES`).
@@ -133,7 +136,8 @@ class Settings:
     refine : bool
         Refine the map by ZoomOut spectral upsampling (:mod:`meshcorr.stages.refine`).
     refine_k : int
-        Laplace-Beltrami basis size of the refinement.
+        Laplace-Beltrami basis size of the refinement, 2 to :data:`MAX_REFINE_K`
+        (clipped to a mesh's vertices - 1).
     shells : bool
         After the refinement, align the shapes' smooth shells (their
         coordinates low-passed to a growing number of Laplace-Beltrami
@@ -270,7 +274,7 @@ class Settings:
         values = dict(k=k, geodesic=check_choice("geodesic", self.geodesic, GEODESIC_METHODS),
                       n_samples=check_int("n_samples", self.n_samples, minimum=k + 1))
         values.update((name, check_bool(name, getattr(self, name))) for name in _SPECTRAL_SWITCHES)
-        values.update(refine_k=check_int("refine_k", self.refine_k, minimum=2),
+        values.update(refine_k=_refine_size(self.refine_k),
                       reorder=check_choice("reorder", self.reorder, REORDER_MODES),
                       n_anchors=check_int("n_anchors", self.n_anchors, minimum=0),
                       coarse_vertices=_coarse_size(self.coarse_vertices),
@@ -354,6 +358,16 @@ def _reject_ignored(changed: dict, *, bijective: bool) -> None:
         name, flag, what, other, instead = pairs[0]
         raise ParameterError(f"{name}={changed[name]!r} ({flag}) is {what}, which {other} skips: it would be "
                              f"ignored. Remove {name} ({flag}), or {instead}.")
+
+
+def _refine_size(value) -> int:
+    """``refine_k`` checked: 2 to :data:`MAX_REFINE_K`."""
+    value = check_int("refine_k", value, minimum=2)
+    if value > MAX_REFINE_K:
+        raise ParameterError(f"refine_k={value} (--refine-k) is more than the refinement uses: give at most "
+                             f"{MAX_REFINE_K} (default {REFINE_K}). A larger basis takes minutes: 100000, clipped "
+                             "to a mesh's vertices - 1, took 131 s on a 500-vertex mesh.")
+    return value
 
 
 def _coarse_size(value) -> int:

@@ -1,5 +1,5 @@
 """Cases of issue 31's items 10, 14, 16, 17 and 19: options ignored in silence, extreme coordinates, a tiny
-mesh, unbounded --workers / --refine-k, and the messages' option names."""
+mesh, unbounded --workers / --refine-k, and the messages' flag names."""
 
 from pathlib import Path
 
@@ -95,4 +95,9 @@ CASES = [
                                               "--workers", "100000"], exit=2, stderr="--workers 100000 would start",
          check=lambda tmp: "an output folder was made" if (tmp / "out").exists() else None),
     _refused("--refine-k 100000", ["--refine-k", "100000"], "refine_k=100000 (--refine-k) is more than"),
+    # item 19: messages name the command line's flags, not only the settings
+    _refused("--control-points 3 names its flag", ["--control-points", "3"],
+             "'n_control' parameter (--control-points) must be an int >= 7"),
+    _refused("--anchors -1 names its flag", ["--anchors", "-1"], "'n_anchors' parameter (--anchors) must be"),
+    _refused("--alpha -1 names its flag", ["--alpha", "-1"], "'anchor_weight' parameter (--alpha) must be"),
 ]

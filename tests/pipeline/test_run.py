@@ -106,8 +106,8 @@ def test_too_few_vertices_names_k():
     ({"k": 2.5}, "'k' parameter must be an int"),
     ({"geodesic": "euclid"}, "'geodesic' parameter must be one of"),
     ({"reorder": "best"}, "'reorder' parameter must be one of"),
-    ({"n_anchors": -1}, "'n_anchors' parameter must be an int >= 0"),
-    ({"anchor_weight": -0.5}, "'anchor_weight' parameter must be a number >= 0"),
+    ({"n_anchors": -1}, r"'n_anchors' parameter \(--anchors\) must be an int >= 0"),
+    ({"anchor_weight": -0.5}, r"'anchor_weight' parameter \(--alpha\) must be a number >= 0"),
 ])
 def test_bad_options_are_rejected(shape, kwargs, message):
     with pytest.raises(ParameterError, match=message):

@@ -42,3 +42,11 @@ def test_refine_k_is_bounded():
     assert Settings(refine_k=MAX_REFINE_K).refine_k == MAX_REFINE_K
     with pytest.raises(ParameterError, match=r"refine_k=100000 \(--refine-k\) is more than .* at most 200"):
         Settings(refine_k=100000)
+
+
+def test_messages_name_the_command_line_flags_too():
+    # They named n_anchors and anchor_weight where the command line says --anchors and --alpha (item 19).
+    with pytest.raises(ParameterError, match=r"'n_anchors' parameter \(--anchors\) must be an int >= 0"):
+        Settings(n_anchors=-1)
+    with pytest.raises(ParameterError, match=r"'anchor_weight' parameter \(--alpha\) must be a number >= 0"):
+        Settings(anchor_weight=-1.0)

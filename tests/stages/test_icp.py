@@ -93,3 +93,8 @@ def test_icp_keeps_the_last_warp_when_the_pairs_are_affinely_dependent():
     result = tps_icp(flat, flat[::-1].copy(), n_control=12)
     np.testing.assert_array_equal(result.warped, flat[::-1])
     assert result.history == [] and result.spline is None
+
+
+def test_a_bad_control_point_count_names_its_flag():
+    with pytest.raises(ParameterError, match=r"'n_control' parameter \(--control-points\) must be an int >= 7"):
+        tps_icp(np.zeros((10, 5)), np.zeros((10, 5)), n_control=3)

@@ -276,9 +276,10 @@ class Settings:
         values.update((name, check_bool(name, getattr(self, name))) for name in _SPECTRAL_SWITCHES)
         values.update(refine_k=_refine_size(self.refine_k),
                       reorder=check_choice("reorder", self.reorder, REORDER_MODES),
-                      n_anchors=check_int("n_anchors", self.n_anchors, minimum=0),
+                      n_anchors=check_int("n_anchors", self.n_anchors, minimum=0, flag="--anchors"),
                       coarse_vertices=_coarse_size(self.coarse_vertices),
-                      anchor_weight=check_float("anchor_weight", self.anchor_weight, minimum=0.0),
+                      anchor_weight=check_float("anchor_weight", self.anchor_weight, minimum=0.0,
+                                                  flag="--alpha"),
                       mode=check_choice("mode", self.mode, MODES))
         if self.max_memory is not None:
             parse_memory(self.max_memory)  # a size it cannot read raises here (the run resolves it)

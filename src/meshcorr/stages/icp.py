@@ -99,7 +99,7 @@ def tps_icp(X: np.ndarray, Y: np.ndarray, *, max_iter: int = ICP_ITERATIONS, n_c
     result : ICPResult
     """
     max_iter = check_int("icp_iterations", max_iter, minimum=0)
-    n_control = check_int("n_control", n_control, minimum=X.shape[1] + 2)
+    n_control = check_int("n_control", n_control, minimum=X.shape[1] + 2, flag="--control-points")
     anneal = check_float("anneal", anneal, minimum=0.0, exclusive=True, maximum=1.0)
     tol = check_float("tol", tol, minimum=0.0)
     rtol = check_float("rtol", rtol, minimum=0.0)

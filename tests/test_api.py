@@ -260,7 +260,7 @@ def test_matcher_takes_prepared_shapes(shape, copy_and_truth, result):
 @pytest.mark.parametrize("options, message", [
     ({"random_state": -1}, "'random_state' parameter must be an int >= 0. Got -1"),
     ({"random_state": 1.5, "method": "icp"}, "'random_state' parameter must be an int. Got 1.5"),
-    ({"anchor_weight": float("inf")}, "'anchor_weight' parameter must be a finite real number"),
+    ({"anchor_weight": float("inf")}, r"'anchor_weight' parameter \(--alpha\) must be a finite real number"),
     ({"shells": "no"}, "'shells' parameter must be True or False. Got 'no'"),
     ({"bijective": "yes"}, "'bijective' parameter must be True or False"),
     ({"extremities": None}, "'extremities' parameter must be True or False"),

@@ -71,3 +71,17 @@ def test_fmap_export_and_import_round_trip(files, capsys):
     trimesh.Trimesh(tube.vertices, tube.faces, process=False).export(small)
     assert main(["fmap", str(small), b, "--to-map", str(folder / "fmap.npz"), "-o", str(folder / "z.txt")]) == 3
     assert "was written for meshes of" in capsys.readouterr().err
+
+
+def test_fmap_to_map_refuses_k_and_seed_it_would_ignore(files, capsys):
+    folder, _, _ = files
+    a, b = str(folder / "a.off"), str(folder / "b.obj")
+    assert main(["fmap", a, b, str(folder / "map.txt"), "-o", str(folder / "f2.npz")]) == 0
+    with np.load(folder / "f2.npz") as data:
+        assert data["C"].shape == (30, 30)  # the default basis size is unchanged
+    for extra, named in ((["-k", "25"], "-k 25"), (["--seed", "3"], "--seed 3"),
+                         (["-k", "25", "--seed", "3"], "-k 25 and --seed 3")):
+        out = folder / "refused.txt"
+        assert main(["fmap", a, b, "--to-map", str(folder / "f2.npz"), "-o", str(out), *extra]) == 2
+        err = capsys.readouterr().err
+        assert named in err and "--to-map" in err and "ignored" in err and not out.exists()

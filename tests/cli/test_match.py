@@ -85,6 +85,20 @@ def test_bad_k_and_missing_output_folder(tube_files_with_truth, tmp_path, capsys
     assert "does not exist" in err
 
 
+@pytest.mark.parametrize("extra, named", [
+    (["--mode", "dense", "--samples", "30"], ("(--samples)", "--mode dense")),
+    (["--no-refine", "--refine-k", "20"], ("(--refine-k)", "--no-refine")),
+    (["--icp-iterations", "0", "--control-points", "40"], ("(--control-points)", "--icp-iterations 0")),
+    (["--mode", "scalable", "--max-memory", "4GiB"], ("(--max-memory)", "--mode scalable")),
+])
+def test_an_option_another_makes_ignored_is_a_usage_error(tube_files_with_truth, tmp_path, capsys, extra, named):
+    src, tgt, _ = tube_files_with_truth
+    out = tmp_path / "m.txt"
+    assert main(["match", src, tgt, "-o", str(out), *extra]) == 2
+    err = capsys.readouterr().err
+    assert all(name in err for name in named) and "ignored" in err and not out.exists()
+
+
 def test_bijective_with_unequal_counts_leaves_no_file(tmp_path, capsys):
     a, b = ds.tube(n_along=20, n_around=10), ds.tube(n_along=22, n_around=10)
     pa, pb = tmp_path / "a.off", tmp_path / "b.off"

@@ -147,6 +147,7 @@ def test_show_errors_are_one_line(bent_tube_files, tmp_path, capsys):
          "outside the target's vertex range"),
         (_args(bent_tube_files, "-o", tmp_path / "missing" / "c.png"), "does not exist"),
         (_args(bent_tube_files, "-o", tmp_path / "d.png", "--error"), "--gt"),
+        (_args(bent_tube_files, "-o", tmp_path / "e.png", "--geodesic", "fmm"), "--geodesic fmm chooses the solver"),
     ]
     for number, (argv, message) in enumerate(cases):
         assert main(["show", *argv]) == (3 if number < 2 else 2)  # a map file that does not fit is bad data
@@ -255,6 +256,8 @@ def test_transfer_scalar_field(bent_tube_files, tmp_path):
 def test_transfer_errors_are_one_line(bent_tube_files, tmp_path, capsys):
     wrong = tmp_path / "wrong.txt"
     np.savetxt(wrong, np.zeros(bent_tube_files["n_target"] + 1))
+    rgb = tmp_path / "rgb.npy"
+    np.save(rgb, np.full((bent_tube_files["n_target"], 3), 200))
     cases = [  # (arguments, exit code: 2 usage, 3 an attribute file that cannot be used, message)
         (_args(bent_tube_files, "--attribute", wrong, "-o", tmp_path / "a.ply"), 3, "one row per target vertex"),
         (_args(bent_tube_files, "--attribute", tmp_path / "nope.txt", "-o", tmp_path / "b.ply"), 2, "no such file"),
@@ -263,6 +266,10 @@ def test_transfer_errors_are_one_line(bent_tube_files, tmp_path, capsys):
         (_args(bent_tube_files, "--attribute", "colors", "-o", tmp_path / "c.ply"), 2, "no per-vertex colours"),
         (_args(bent_tube_files, "--attribute", "parts", "-o", tmp_path / "d.off"), 2, ".ply or .obj"),
         (_args(bent_tube_files, "--attribute", "xyz", "-o", tmp_path / "no" / "e.ply"), 2, "does not exist"),
+        (_args(bent_tube_files, "--attribute", "parts", "-o", tmp_path / "g.ply", "--cmap", "coolwarm"), 2,
+         "--cmap coolwarm colours a scalar field, and --attribute parts gives colours"),
+        (_args(bent_tube_files, "--attribute", rgb, "-o", tmp_path / "h.ply", "--cmap", "error"), 2,
+         "holds colours (3 or 4 columns)"),
     ]
     for argv, code, message in cases:
         assert main(["transfer", *argv]) == code

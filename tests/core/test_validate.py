@@ -6,6 +6,8 @@ import numpy as np
 import pytest
 
 from meshcorr.errors import MeshError, ParameterError
+from meshcorr.core.mesh import Mesh
+from meshcorr.core.pointcloud import validate_cloud
 from meshcorr.core.validate import validate_mesh
 
 TET_V = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
@@ -364,3 +366,27 @@ def test_shape_store_computes_each_key_once_and_keeps_it():
     assert calls == [1] and ("double", 2) in store and ("double", 3) not in store
     store.put(("double", 3), 6)
     assert store[("double", 3)] == 6 and len(store) == 2 and sorted(store) == [("double", 2), ("double", 3)]
+
+
+
+@pytest.mark.parametrize("vertices, problem", [
+    (OCTA_V * 1e200, "coordinates as large as 1e+200"),
+    (OCTA_V + 1e60, "coordinates as large as 1e+60"),  # small, but far from the origin
+    (OCTA_V * 1e-200, "a bounding box only 2e-200 across"),
+])
+def test_coordinates_beyond_the_numerics_are_refused_with_the_fix(vertices, problem):
+    # Near 1e200 potpourri3d failed on inf (an internal error); near 1e-200 every face looked degenerate.
+    for check in (lambda: validate_mesh(vertices, OCTA_F), lambda: validate_cloud(vertices),
+                  lambda: Mesh(vertices, OCTA_F)):
+        with pytest.raises(MeshError) as error:
+            check()
+        message = str(error.value)
+        assert problem in message and "divide them by the bounding box" in message
+        assert "degenerate" not in message
+
+
+def test_coordinates_within_the_numerics_pass_and_the_checks_see_the_faces_only():
+    for scale in (1e-40, 1e40):
+        np.testing.assert_array_equal(validate_mesh(OCTA_V * scale, OCTA_F)[0], OCTA_V * scale)
+    far = np.vstack([OCTA_V, [1e200, 0.0, 0.0]])  # an unreferenced vertex: dropped, not a scale problem
+    assert len(validate_mesh(far, OCTA_F, largest_component=True)[0]) == 6

@@ -47,7 +47,7 @@ BAD = [
     ("spectral", "bijective", "true", "The 'bijective' parameter must be True or False. Got 'true' instead."),
     # checked by the method only once the meshes are loaded (meshcorr.stages.icp.tps_icp, meshcorr.spectral.modes.select_mode)
     ("spectral", "icp_iterations", "-1", "The 'icp_iterations' parameter must be an int >= 0. Got -1 instead."),
-    ("spectral", "n_control", "6", "The 'n_control' parameter must be an int >= 7. Got 6 instead."),
+    ("spectral", "n_control", "6", "The 'n_control' parameter (--control-points) must be an int >= 7. Got 6 instead."),
     ("spectral", "scalable_above", "'many'", "The 'scalable_above' parameter must be an int. Got 'many' instead."),
     ("icp", "trim", "5", "The 'trim' parameter must be a number <= 1.0. Got 5.0 instead."),
     ("shape-context", "assignment", "greedy", "The 'assignment' parameter must be one of 'hungarian', 'argmin'. "
@@ -77,7 +77,7 @@ def test_bench_runs_the_corrected_value(dataset, tmp_path, capsys):
     out = tmp_path / "out"
     base = ["bench", str(dataset), "--methods", "spectral,icp", "--out", str(out), "--no-plot", "-q"]
     assert main([*base, "--set", "spectral:n_control=4"]) == EXIT_USAGE  # k=6: at least 7
-    assert "'n_control' parameter must be an int >= 7. Got 4" in capsys.readouterr().err and not out.exists()
+    assert "'n_control' parameter (--control-points) must be an int >= 7. Got 4" in capsys.readouterr().err and not out.exists()
     good = ["--set", "spectral:reorder=greedy", "--set", "spectral:n_control=7", "--set", "spectral:k=5",
             "--set", "icp:trim=0.8"]
     assert main([*base, *good]) == 0, capsys.readouterr().err
@@ -117,7 +117,7 @@ def test_check_options_raises_what_the_run_raises(method, options):
 
 
 def test_check_options_takes_good_values_and_knows_each_later_check():
-    for method, options in [("spectral", {}), ("spectral", dict(k=5, reorder="greedy", icp_iterations=0,
+    for method, options in [("spectral", {}), ("spectral", dict(k=5, reorder="greedy", icp_iterations=1,
                                                                    n_control=6, anneal=1.0, scalable_above=0)),
                             ("spectral", dict(partial="source", mode="scalable", n_samples=50)),
                             ("icp", dict(trim=0.8, huber=1.5, n_rotations=4, prealign=False)),
@@ -164,7 +164,7 @@ def batches(monkeypatch):
 
 @pytest.mark.parametrize("item, message", [
     ("icp_iterations=abc", "The 'icp_iterations' parameter must be an int. Got 'abc' instead."),  # a bad int
-    ("n_control=3", "The 'n_control' parameter must be an int >= 7. Got 3 instead."),
+    ("n_control=3", "The 'n_control' parameter (--control-points) must be an int >= 7. Got 3 instead."),
     ("symmetry=left", "The 'symmetry' parameter must be one of 'auto', 'cost', 'mirror'. Got 'left' instead."),
     ("anneal=5", "The 'anneal' parameter must be a number <= 1.0. Got 5.0 instead."),
 ])
@@ -185,7 +185,7 @@ def test_batch_passes_good_set_values_on_and_blames_a_bad_flag_on_itself(tmp_pat
     assert main(batch_args(tmp_path, "-k", "50", "--set", "symmetry=cost")) == EXIT_USAGE
     assert capsys.readouterr().err == "meshcorr: error: The 'k' parameter must be an int <= 10. Got 50 instead.\n"
     assert main(batch_args(tmp_path, "-k", "4", "--set", "n_control=4")) == EXIT_USAGE  # k=4: at least 5
-    assert "--set 'n_control=4': The 'n_control' parameter must be an int >= 5" in capsys.readouterr().err
+    assert "--set 'n_control=4': The 'n_control' parameter (--control-points) must be an int >= 5" in capsys.readouterr().err
     assert len(batches) == 1
 
 

@@ -106,8 +106,8 @@ def test_too_few_vertices_names_k():
     ({"k": 2.5}, "'k' parameter must be an int"),
     ({"geodesic": "euclid"}, "'geodesic' parameter must be one of"),
     ({"reorder": "best"}, "'reorder' parameter must be one of"),
-    ({"n_anchors": -1}, "'n_anchors' parameter must be an int >= 0"),
-    ({"anchor_weight": -0.5}, "'anchor_weight' parameter must be a number >= 0"),
+    ({"n_anchors": -1}, r"'n_anchors' parameter \(--anchors\) must be an int >= 0"),
+    ({"anchor_weight": -0.5}, r"'anchor_weight' parameter \(--alpha\) must be a number >= 0"),
 ])
 def test_bad_options_are_rejected(shape, kwargs, message):
     with pytest.raises(ParameterError, match=message):
@@ -142,3 +142,20 @@ def test_bent_pose_maps_back_with_small_geodesic_error(creature_rest, pose, reso
     # Measured 0.023-0.032; a mirrored or scrambled map scores > 0.2.
     assert errors.mean() < 0.05
     assert res.icp_converged and len(res.icp_history) <= 10
+
+
+def hexagonal_prism(height: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """A closed hexagonal prism of 12 vertices and 20 faces (caps fanned from a corner)."""
+    angles = np.arange(6) * np.pi / 3
+    ring = np.c_[np.cos(angles), np.sin(angles), np.zeros(6)]
+    vertices = np.vstack([ring, ring + [0.0, 0.0, height]])
+    faces = [[i, (i + 1) % 6, 6 + (i + 1) % 6] for i in range(6)] + [[i, 6 + (i + 1) % 6, 6 + i] for i in range(6)]
+    faces += [[0, t + 1, t] for t in range(1, 5)] + [[6, 6 + t, 7 + t] for t in range(1, 5)]
+    return vertices, np.array(faces)
+
+
+def test_a_tiny_closed_mesh_is_matched():
+    # Its flat embedding made the spline system of the ICP singular (an internal error, issue 31 item 16).
+    source, target = hexagonal_prism(), hexagonal_prism(1.5)
+    mapping = meshcorr.match(source, target).map
+    assert mapping.shape == (12,) and mapping.min() >= 0 and mapping.max() < 12

@@ -82,3 +82,19 @@ def test_tps_equals_scipy_rbf_interpolator(smoothing):
     query = rng.normal(size=(20_000, 5)) * 0.5  # more than one evaluation block
     reference = RBFInterpolator(src, dst, kernel="linear", degree=1, smoothing=smoothing)(query)
     np.testing.assert_allclose(fit_tps(src, dst, smoothing)(query), reference, rtol=0, atol=1e-9)
+
+
+def test_icp_keeps_the_last_warp_when_the_pairs_are_affinely_dependent():
+    # A tiny symmetric mesh (a 12-vertex hexagonal prism) has a flat embedding: its spline system is
+    # singular, which was an internal error (LinAlgError: Singular matrix).
+    rng = np.random.default_rng(0)
+    flat = np.zeros((12, 5))
+    flat[:, :2] = rng.normal(size=(12, 2))  # 12 points spanning 2 of 5 dimensions
+    result = tps_icp(flat, flat[::-1].copy(), n_control=12)
+    np.testing.assert_array_equal(result.warped, flat[::-1])
+    assert result.history == [] and result.spline is None
+
+
+def test_a_bad_control_point_count_names_its_flag():
+    with pytest.raises(ParameterError, match=r"'n_control' parameter \(--control-points\) must be an int >= 7"):
+        tps_icp(np.zeros((10, 5)), np.zeros((10, 5)), n_control=3)

@@ -1,8 +1,10 @@
 """meshcorr.stages.landmarks: a dense map from landmark pairs by geodesic descriptors."""
 
 import numpy as np
+import pytest
 
-from meshcorr.stages.landmarks import landmark_descriptors, landmark_map
+from meshcorr.errors import ParameterError
+from meshcorr.stages.landmarks import landmark_descriptors, landmark_map, landmark_table
 
 N = 21
 
@@ -37,3 +39,12 @@ def test_landmarks_are_mapped_exactly_even_against_their_descriptors():
     pairs = np.array([[0, 0], [20, 20], [10, 3]])  # the third pair disagrees with the other two
     mapping = landmark_map(path_row, path_row, pairs)
     assert mapping[10] == 3 and mapping[0] == 0 and mapping[20] == 20
+
+
+def test_booleans_are_no_landmark_indices():
+    # numpy took [(True, 3)] for vertex 1 -> vertex 3 (issue 31, item 19).
+    for landmarks in ([(True, 3)], [(2, np.False_)], [[0, 1], [False, 2]]):
+        with pytest.raises(ParameterError, match="not True or False"):
+            landmark_table(landmarks)
+    assert landmark_table([(1, 3)]).tolist() == [[1, 3]]
+    assert landmark_table(np.array([[1, 3]])).tolist() == [[1, 3]]

@@ -51,6 +51,17 @@ species (measured in benchmarks/RESULTS-collections.md).
 """
 
 
+#: The most local worker processes ``--workers`` may start: this many per core, and never more than
+#: :data:`MAX_WORKERS` (each process holds its meshes and matrices; more only queue for the cores).
+WORKERS_PER_CORE = 4
+MAX_WORKERS = 256
+
+
+def max_workers() -> int:
+    """The most ``--workers`` on this machine: :data:`WORKERS_PER_CORE` per core, at most :data:`MAX_WORKERS`."""
+    return min(WORKERS_PER_CORE * (os.cpu_count() or 1), MAX_WORKERS)
+
+
 def add_parser(sub) -> None:
     p = sub.add_parser("batch", help=HELP, description=DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -65,8 +76,8 @@ def add_parser(sub) -> None:
     p.add_argument("--scheduler", metavar="tcp://HOST:PORT",
                    help="an existing Dask scheduler (default: a local cluster started here)")
     p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="worker processes of the local cluster, >= 1 (default: one per core; not used "
-                        "with --scheduler)")
+                   help="worker processes of the local cluster, 1 to 4 per core (default: one per core; "
+                        "not used with --scheduler)")
     p.add_argument("--cache", metavar="DIR", nargs="?", const=True, default=None,
                    help="keep prepared shapes in this on-disk cache (no DIR: the default cache, "
                         "see 'meshcorr cache info')")
@@ -125,6 +136,11 @@ def _pairs(args) -> list[tuple[str, str]]:
     if args.workers is not None and args.scheduler:
         raise ParameterError("--workers sets the local cluster's size; with --scheduler the cluster's own "
                              "workers run the batch: leave out one of them.")
+    most = max_workers()
+    if args.workers is not None and args.workers > most:  # it started processes until the machine gave out
+        raise ParameterError(f"--workers {args.workers} would start {args.workers} processes on this machine's "
+                             f"{os.cpu_count() or 1} core(s): give at most {most} ({WORKERS_PER_CORE} per core, "
+                             f"at most {MAX_WORKERS}), or run a larger cluster and pass --scheduler.")
     if isinstance(args.cache, str) and os.path.isfile(args.cache):
         raise ParameterError(f"--cache took {args.cache} as its folder: write --cache=DIR, or put --cache (the "
                              "default folder) after the mesh files.")

@@ -33,6 +33,9 @@ it to stdout).
 """
 
 
+#: ``meshcorr fmap``'s basis size and eigensolver seed when -k / --seed are not given.
+FMAP_K, FMAP_SEED = 30, 0
+
 #: The source argument both commands share: (flags, options); each has its own TARGET help.
 _SOURCE = (("source",), dict(metavar="SOURCE", help="mesh whose vertices were mapped"))
 
@@ -49,10 +52,11 @@ def add_parser(sub) -> None:
                   (("map",), dict(metavar="MAP", nargs="?", help="the vertex map to export")),
                   (("-o", "--output"), dict(required=True, metavar="OUT", help="the functional map (.npz), "
                                             "or with --to-map the vertex map (.txt/.npy)")),
-                  (("-k",), dict(type=int, default=30, help="basis size (30)")),
+                  (("-k",), dict(type=int, default=None, help=f"basis size ({FMAP_K}; not with --to-map)")),
                   (("--to-map",), dict(metavar="FMAP.npz", help="import this functional map as a vertex map")),
-                  (("--seed",), dict(type=seed, default=0,
-                                     help="seed of the eigensolvers, an integer >= 0 (0)"))]),
+                  (("--seed",), dict(type=seed, default=None,
+                                     help=f"seed of the eigensolvers, an integer >= 0 ({FMAP_SEED}; "
+                                          "not with --to-map)"))]),
     }
     for name, (help_text, description, run, arguments) in commands.items():
         parser = sub.add_parser(name, help=help_text, description=description,
@@ -185,6 +189,13 @@ def run_fmap(args) -> int:
     _check_outputs(args, {"-o": args.output})
     if (args.map is None) == (args.to_map is None):
         raise ParameterError("Give either MAP (to export its functional map) or --to-map FMAP.npz (to import one).")
+    if args.to_map is not None:
+        given = [f"{flag} {value}" for flag, value in (("-k", args.k), ("--seed", args.seed)) if value is not None]
+        if given:
+            raise ParameterError(f"{' and '.join(given)} shape{'s' if len(given) == 1 else ''} an exported "
+                                 f"functional map; --to-map {args.to_map} imports one, whose basis and seed are in "
+                                 f"the file: {'it' if len(given) == 1 else 'they'} would be ignored. Remove "
+                                 f"{' and '.join(g.split()[0] for g in given)}, or export a map (MAP) instead.")
     if args.map is not None and not args.output.lower().endswith(".npz"):  # before the work, not after
         raise ParameterError(f"Cannot write {args.output}: a functional map is written as .npz.")
     source, target, mapping = _inputs(args)
@@ -196,6 +207,8 @@ def run_fmap(args) -> int:
             write_map(args.output, mapping)
             _status(args, f"wrote {args.output}: the vertex map of {args.to_map}")
         return 0
-    functional_map(source, target, mapping, args.k, random_state=args.seed).save(args.output)
-    _status(args, f"wrote {args.output}: the {args.k} x {args.k} functional map of {args.map}")
+    k = FMAP_K if args.k is None else args.k
+    functional_map(source, target, mapping, k, random_state=FMAP_SEED if args.seed is None else args.seed
+                   ).save(args.output)
+    _status(args, f"wrote {args.output}: the {k} x {k} functional map of {args.map}")
     return 0

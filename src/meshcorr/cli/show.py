@@ -22,6 +22,10 @@ Needs matplotlib (pip install meshcorr[plot]); no display or GPU.
 """
 
 
+#: The geodesic solver of the errors against ``--gt`` when ``--geodesic`` is not given.
+GEODESIC = "heat"
+
+
 def add_parser(sub) -> None:
     p = sub.add_parser("show", help=HELP, description=DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -36,8 +40,8 @@ def add_parser(sub) -> None:
                    help="colour SOURCE by geodesic error (needs --gt)")
     p.add_argument("--coloring", choices=("parts", "xyz"), default="parts",
                    help="colouring of TARGET (default: parts)")
-    p.add_argument("--geodesic", choices=GEODESIC_METHODS, default="heat",
-                   help="geodesic solver of the errors against --gt (default: heat)")
+    p.add_argument("--geodesic", choices=GEODESIC_METHODS, default=None,
+                   help=f"geodesic solver of the errors against --gt (default: {GEODESIC})")
     add_camera_arguments(p)
     p.set_defaults(run=run)
 
@@ -131,6 +135,10 @@ def run(args) -> int:
     require_matplotlib()
     if args.error and not args.gt:
         raise ParameterError("--error colours SOURCE by its error against the ground truth: give --gt GT.")
+    if args.geodesic is not None and not args.gt:
+        raise ParameterError(f"--geodesic {args.geodesic} chooses the solver of the errors against the ground "
+                             "truth, and without --gt there are none: it would be ignored. Remove --geodesic, "
+                             "or give --gt GT.")
     source = read_mesh(args.source, name=args.source)
     if args.gt:  # the errors against the truth are geodesic distances on TARGET
         mesh = one_surface(args.target, "TARGET", "The geodesic errors of --gt need one connected "
@@ -143,7 +151,7 @@ def run(args) -> int:
     # The geodesic errors against --gt take minutes on large meshes: say how far they are (as evaluate).
     progress = progress_for(args, f"{args.map} on {args.target}")
     info = correspondence_figure(source, target, mapping, args.output, truth=truth,
-                                 error=args.error, coloring=args.coloring, geodesic=args.geodesic,
+                                 error=args.error, coloring=args.coloring, geodesic=args.geodesic or GEODESIC,
                                  elev=args.elev, azim=args.azim, up=args.up, dpi=args.dpi,
                                  map_name=args.map, progress=progress)
     line = f"wrote {args.output}"

@@ -23,6 +23,12 @@ field (NaN where unmapped), or the colours.
 """
 
 
+#: The colour map of a scalar field when ``--cmap`` is not given.
+CMAP = "viridis"
+#: The ``--attribute`` names that give colours, not a scalar field (so no ``--cmap``).
+COLOUR_ATTRIBUTES = ("colors", "parts", "xyz")
+
+
 def add_parser(sub) -> None:
     p = sub.add_parser("transfer", help=HELP, description=DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -33,8 +39,8 @@ def add_parser(sub) -> None:
                    help="'colors', 'parts', 'xyz' or a per-vertex file of TARGET")
     p.add_argument("-o", "--output", required=True, metavar="OUT.ply",
                    help="SOURCE with the transferred vertex colours (.ply or .obj)")
-    p.add_argument("--cmap", choices=("viridis", "coolwarm", "error"), default="viridis",
-                   help="colour map of a scalar field (default: viridis)")
+    p.add_argument("--cmap", choices=("viridis", "coolwarm", "error"), default=None,
+                   help=f"colour map of a scalar field (default: {CMAP})")
     p.add_argument("--values-out", metavar="FILE",
                    help="also write the transferred values, one row per SOURCE vertex (.npy, else text)")
     p.set_defaults(run=run)
@@ -49,6 +55,15 @@ def _read_attribute(args, vertices, faces):
     return read_attribute(args.attribute, args.target, vertices, faces)
 
 
+def _refuse_cmap(args, why: str) -> None:
+    """``--cmap`` colours a scalar field only: with colours it would be ignored."""
+    from ..errors import ParameterError
+
+    raise ParameterError(f"--cmap {args.cmap} colours a scalar field, and {why}, not a scalar field: --cmap "
+                         "would be ignored. Remove --cmap, or give a FILE of one value per TARGET vertex "
+                         "to --attribute.")
+
+
 def run(args) -> int:
     from ..errors import ParameterError
     from ..io import read_mesh, staged_writes, write_mesh
@@ -59,6 +74,8 @@ def run(args) -> int:
     if not args.output.lower().endswith((".ply", ".obj")):
         raise ParameterError(f"Cannot write {args.output}: vertex colours need a .ply or .obj file "
                              "(.ply for a point cloud).")
+    if args.cmap is not None and args.attribute in COLOUR_ATTRIBUTES:
+        _refuse_cmap(args, f"--attribute {args.attribute} gives colours")
     inputs = {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map, "--attribute": args.attribute}
     check_outputs({"-o": args.output, "--values-out": args.values_out}, inputs)
     V1, F1 = read_mesh(args.source, name=args.source)
@@ -68,7 +85,9 @@ def run(args) -> int:
                              "as a .ply file of points.")
     mapping = read_checked_map(args.map, len(V1), len(V2))
     values = _read_attribute(args, V2, F2)
-    colors, pulled = transfer_attribute(values, mapping, cmap=args.cmap)
+    if args.cmap is not None and values.ndim == 2:
+        _refuse_cmap(args, f"--attribute {args.attribute} holds colours (3 or 4 columns)")
+    colors, pulled = transfer_attribute(values, mapping, cmap=args.cmap or CMAP)
     with staged_writes():
         write_mesh(args.output, V1, F1, vertex_colors=colors)
         if args.values_out:

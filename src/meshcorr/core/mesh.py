@@ -18,7 +18,7 @@ from ..errors import MeshError
 from .geodesics import ProgressFn, pairwise_geodesics
 from .pointcloud import validate_cloud
 from .store import ShapeStore
-from .validate import check_vertex_count, select_component, validate_mesh
+from .validate import check_scale, check_vertex_count, select_component, validate_mesh
 from .geodesics import DEFAULT_GEODESIC
 
 
@@ -62,6 +62,7 @@ class Mesh:
                             f"{self.faces.shape}.")
         if not np.isfinite(self.vertices).all():
             raise MeshError(f"{name}: NaN or infinite vertex coordinates; repair the mesh (as_mesh names them).")
+        check_scale(self.vertices, name)
         outside = self.faces[(self.faces < 0) | (self.faces >= len(self.vertices))]
         if outside.size:
             raise MeshError(f"{name}: a face names vertex {int(outside[0])}, outside 0..{len(self.vertices) - 1}.")

@@ -33,7 +33,7 @@ from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import cKDTree
 
 from ..errors import MeshError
-from .validate import as_array, check_finite, plural, which
+from .validate import as_array, check_finite, check_scale, plural, which
 
 __all__ = ["N_NEIGHBORS", "RING_NEIGHBORS", "MIN_POINTS", "edges", "knn_graph", "triangulation_failed",
            "validate_cloud"]
@@ -230,6 +230,7 @@ def validate_cloud(points, *, min_vertices: int = 3, largest_component: bool = F
         raise MeshError(f"{name}: point coordinates must be real numbers; got dtype {points.dtype}.")
     points = np.array(points, dtype=np.float64)
     check_finite(points, name)
+    check_scale(points, name)
     fewest = max(MIN_POINTS, int(min_vertices))
 
     def check_count(count: int) -> None:

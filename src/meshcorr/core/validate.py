@@ -5,9 +5,9 @@ names the problem, how many elements are affected (with the first few
 offending indices) and the fix. All checks are vectorized numpy / scipy.
 
 The checks run in this order: shapes (ragged lists, emptiness), real and
-finite coordinates, face index range, degenerate faces, non-manifold faces /
-edges / vertices, unreferenced vertices and connected components, minimum
-vertex count.
+finite coordinates, face index range, the coordinates' scale, degenerate
+faces, non-manifold faces / edges / vertices, unreferenced vertices and
+connected components, minimum vertex count.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from scipy.sparse.csgraph import connected_components
 
 from meshcorr.errors import MeshError, ParameterError
 
-__all__ = ["as_array", "check_finite", "check_vertex_count", "pinched_vertices", "plural", "select_component",
+__all__ = ["as_array", "check_finite", "check_scale", "check_vertex_count", "pinched_vertices", "plural", "select_component",
            "validate_mesh", "which"]
 
 _SHOW = 5  # how many offending indices a message lists
@@ -112,6 +112,36 @@ def check_finite(vertices: np.ndarray, name: str) -> None:
             f"({which('vertex', 'vertices', bad)}). "
             "Remove or repair these vertices before matching."
         )
+
+
+#: The coordinates meshcorr's numerics handle: magnitudes up to :data:`MAX_COORDINATE` and a bounding box
+#: at least :data:`MIN_EXTENT` across. Squared areas (lengths to the fourth power) overflow past about 1e77
+#: and underflow below about 1e-77 (potpourri3d's heat method failed near 1e100, and near 1e-100 every
+#: face looked degenerate); within these bounds the map of the examples is the same at every scale.
+MAX_COORDINATE = 1e50
+MIN_EXTENT = 1e-50
+
+
+def check_scale(vertices: np.ndarray, name: str) -> None:
+    """Refuse finite ``(n, 3)`` coordinates too large or too close together for the numerics
+    (:data:`MAX_COORDINATE`, :data:`MIN_EXTENT`), naming the problem and the fix: rescale, as the map
+    does not depend on uniform scale. A bounding box of no extent at all is left to the other checks."""
+    if not len(vertices):
+        return
+    largest = float(np.abs(vertices).max())
+    extent = float(np.ptp(vertices, axis=0).max())  # no squares: they under- or overflow here
+    if largest > MAX_COORDINATE:
+        problem = f"coordinates as large as {largest:.3g}"
+    elif 0.0 < extent < MIN_EXTENT:
+        problem = f"a bounding box only {extent:.3g} across"
+    else:
+        return
+    raise MeshError(
+        f"{name}: {problem}; meshcorr's numerics need coordinates within +-{MAX_COORDINATE:g} and a "
+        f"bounding box at least {MIN_EXTENT:g} across (squared areas would over- or underflow). The map "
+        "does not depend on uniform scale: centre the coordinates and divide them by the bounding box's "
+        f"size{f' ({extent:.3g})' if extent > 0 else ''} before matching."
+    )
 
 
 def _check_index_range(faces: np.ndarray, n_vertices: int, name: str) -> None:
@@ -369,6 +399,7 @@ def validate_mesh(
     vertices, faces = _as_arrays(vertices, faces, name)
     check_finite(vertices, name)
     _check_index_range(faces, len(vertices), name)
+    check_scale(vertices[np.unique(faces)], name)  # before the areas of the degenerate faces' check
     _check_degenerate(vertices, faces, name)
     _check_manifold(faces, len(vertices), name)
     vertices, faces, kept = select_component(vertices, faces, largest_component, name)

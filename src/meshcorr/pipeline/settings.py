@@ -12,7 +12,9 @@ which the field refers to. A Settings is checked when it is made
 parameter must be an int <= 10. Got 12 instead."): an option changed from
 its default that the chosen method does not use raises
 :class:`~meshcorr.errors.ParameterError` naming it
-(:func:`meshcorr.pipeline.methods.reject_inapplicable`), a partial-mode
+(:func:`meshcorr.pipeline.methods.reject_inapplicable`), as does an option
+that another makes certain to be ignored (``refine_k`` with
+``refine=False``, ``n_samples`` with ``mode="dense"``, ...), a partial-mode
 option that does not go with the others raises
 :class:`~meshcorr.errors.PartialityError`. Checks that need the meshes
 (landmark indices, anchors against the vertex count) are left to the run.
@@ -52,6 +54,9 @@ __all__ = ["Settings", "SHAPE_SETTINGS", "REFINE_K", "shape_settings", "as_setti
 
 #: The fewest vertices of a coarse copy: fewer blur a hand or a foot into the arm or leg.
 MIN_COARSE_VERTICES = 300
+#: The largest ``refine_k``: ZoomOut's basis grows to it one step at a time, and each step costs more;
+#: 200 is five times the default (a basis larger than a mesh's vertices - 1 is clipped to that).
+MAX_REFINE_K = 200
 #: Settings whose value must be True or False (numpy's too), in the order they are checked.
 _SWITCHES = ("bijective", "shells", "extremities", "oriented_starts", "sign_search", "prealign")
 #: The spectral pipeline's switches that only it checks (with :data:`_SWITCHES`).
@@ -131,7 +136,8 @@ class Settings:
     refine : bool
         Refine the map by ZoomOut spectral upsampling (:mod:`meshcorr.stages.refine`).
     refine_k : int
-        Laplace-Beltrami basis size of the refinement.
+        Laplace-Beltrami basis size of the refinement, 2 to :data:`MAX_REFINE_K`
+        (clipped to a mesh's vertices - 1).
     shells : bool
         After the refinement, align the shapes' smooth shells (their
         coordinates low-passed to a growing number of Laplace-Beltrami
@@ -275,16 +281,18 @@ class Settings:
         values = dict(k=k, geodesic=check_choice("geodesic", self.geodesic, GEODESIC_METHODS),
                       n_samples=check_int("n_samples", self.n_samples, minimum=k + 1))
         values.update((name, check_bool(name, getattr(self, name))) for name in _SPECTRAL_SWITCHES)
-        values.update(refine_k=check_int("refine_k", self.refine_k, minimum=2),
+        values.update(refine_k=_refine_size(self.refine_k),
                       reorder=check_choice("reorder", self.reorder, REORDER_MODES),
-                      n_anchors=check_int("n_anchors", self.n_anchors, minimum=0),
+                      n_anchors=check_int("n_anchors", self.n_anchors, minimum=0, flag="--anchors"),
                       coarse_vertices=_coarse_size(self.coarse_vertices),
-                      anchor_weight=check_float("anchor_weight", self.anchor_weight, minimum=0.0),
+                      anchor_weight=check_float("anchor_weight", self.anchor_weight, minimum=0.0,
+                                                  flag="--alpha"),
                       mode=check_choice("mode", self.mode, MODES))
         if self.max_memory is not None:
             parse_memory(self.max_memory)  # a size it cannot read raises here (the run resolves it)
         check_choice("symmetry", self.symmetry, SYMMETRY_MODES)
         check_choice("anchor_scale", self.anchor_scale, ANCHOR_SCALES)
+        _reject_ignored(self.changed(), bijective=self.bijective)
         if has_pairs and self.symmetry != "auto":
             raise ParameterError(f"Landmarks settle the left/right choice in the whole-map choice "
                                  f"(symmetry='auto'); symmetry={self.symmetry!r} (--symmetry {self.symmetry}) "
@@ -330,6 +338,44 @@ class Settings:
         if out["landmarks"] is not None:
             out["landmarks"] = np.asarray(out["landmarks"]).tolist()
         return out
+
+
+def _reject_ignored(changed: dict, *, bijective: bool) -> None:
+    """Refuse an option changed from its default that another option makes certain to be ignored.
+
+    ``n_samples`` with ``mode="dense"``, ``max_memory`` with ``mode="scalable"`` (without
+    ``bijective``, whose cost matrix it bounds), ``refine_k`` with ``refine=False``, ``n_control`` or
+    ``anneal`` with ``icp_iterations=0``: the map would be the same without them. ``mode="auto"`` may
+    resolve to either mode at run time, so it goes with both ``n_samples`` and ``max_memory``.
+    """
+    pairs = []
+    if changed.get("mode") == "dense" and "n_samples" in changed:
+        pairs.append(("n_samples", "--samples", "the Nystrom sample count of the scalable mode",
+                      "mode='dense' (--mode dense)", "use mode='scalable' or 'auto'"))
+    if changed.get("mode") == "scalable" and "max_memory" in changed and not bijective:
+        pairs.append(("max_memory", "--max-memory", "the memory the dense mode (or a one-to-one map) may use",
+                      "mode='scalable' (--mode scalable)", "use mode='auto' or 'dense'"))
+    if "refine" in changed and not changed["refine"] and "refine_k" in changed:
+        pairs.append(("refine_k", "--refine-k", "the basis size of the ZoomOut refinement",
+                      "refine=False (--no-refine)", "keep refine=True"))
+    if changed.get("icp_iterations") == 0:
+        pairs += [(name, flag, "a setting of the thin-plate-spline ICP", "icp_iterations=0 (--icp-iterations 0)",
+                   "give icp_iterations > 0") for name, flag in (("n_control", "--control-points"),
+                                                                  ("anneal", "--anneal")) if name in changed]
+    if pairs:
+        name, flag, what, other, instead = pairs[0]
+        raise ParameterError(f"{name}={changed[name]!r} ({flag}) is {what}, which {other} skips: it would be "
+                             f"ignored. Remove {name} ({flag}), or {instead}.")
+
+
+def _refine_size(value) -> int:
+    """``refine_k`` checked: 2 to :data:`MAX_REFINE_K`."""
+    value = check_int("refine_k", value, minimum=2)
+    if value > MAX_REFINE_K:
+        raise ParameterError(f"refine_k={value} (--refine-k) is more than the refinement uses: give at most "
+                             f"{MAX_REFINE_K} (default {REFINE_K}). A larger basis takes minutes: 100000, clipped "
+                             "to a mesh's vertices - 1, took 131 s on a 500-vertex mesh.")
+    return value
 
 
 def _coarse_size(value) -> int:

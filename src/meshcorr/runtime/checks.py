@@ -21,29 +21,37 @@ import numpy as np
 from ..errors import ParameterError
 
 
-def check_int(name: str, value, *, minimum: int | None = None, maximum: int | None = None) -> int:
-    """Return ``value`` as an int or raise :class:`ParameterError`."""
+def _named(name: str, flag: str | None) -> str:
+    """How a message names a parameter: ``'n_control'``, with its command-line flag when it has another name."""
+    return f"{name!r} parameter ({flag})" if flag else f"{name!r} parameter"
+
+
+def check_int(name: str, value, *, minimum: int | None = None, maximum: int | None = None,
+              flag: str | None = None) -> int:
+    """Return ``value`` as an int or raise :class:`ParameterError` (naming ``flag`` too, when given)."""
+    what = _named(name, flag)
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise ParameterError(f"The {name!r} parameter must be an int. Got {value!r} instead.")
+        raise ParameterError(f"The {what} must be an int. Got {value!r} instead.")
     value = int(value)
     if minimum is not None and value < minimum:
-        raise ParameterError(f"The {name!r} parameter must be an int >= {minimum}. Got {value} instead.")
+        raise ParameterError(f"The {what} must be an int >= {minimum}. Got {value} instead.")
     if maximum is not None and value > maximum:
-        raise ParameterError(f"The {name!r} parameter must be an int <= {maximum}. Got {value} instead.")
+        raise ParameterError(f"The {what} must be an int <= {maximum}. Got {value} instead.")
     return value
 
 
 def check_float(name: str, value, *, minimum: float | None = None, exclusive: bool = False,
-                maximum: float | None = None) -> float:
-    """Return ``value`` as a float or raise :class:`ParameterError`."""
+                maximum: float | None = None, flag: str | None = None) -> float:
+    """Return ``value`` as a float or raise :class:`ParameterError` (naming ``flag`` too, when given)."""
+    what = _named(name, flag)
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not math.isfinite(value):
-        raise ParameterError(f"The {name!r} parameter must be a finite real number. Got {value!r} instead.")
+        raise ParameterError(f"The {what} must be a finite real number. Got {value!r} instead.")
     value = float(value)
     if minimum is not None and (value <= minimum if exclusive else value < minimum):
         op = ">" if exclusive else ">="
-        raise ParameterError(f"The {name!r} parameter must be a number {op} {minimum}. Got {value} instead.")
+        raise ParameterError(f"The {what} must be a number {op} {minimum}. Got {value} instead.")
     if maximum is not None and value > maximum:
-        raise ParameterError(f"The {name!r} parameter must be a number <= {maximum}. Got {value} instead.")
+        raise ParameterError(f"The {what} must be a number <= {maximum}. Got {value} instead.")
     return value
 
 

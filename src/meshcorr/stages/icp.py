@@ -99,7 +99,7 @@ def tps_icp(X: np.ndarray, Y: np.ndarray, *, max_iter: int = ICP_ITERATIONS, n_c
     result : ICPResult
     """
     max_iter = check_int("icp_iterations", max_iter, minimum=0)
-    n_control = check_int("n_control", n_control, minimum=X.shape[1] + 2)
+    n_control = check_int("n_control", n_control, minimum=X.shape[1] + 2, flag="--control-points")
     anneal = check_float("anneal", anneal, minimum=0.0, exclusive=True, maximum=1.0)
     tol = check_float("tol", tol, minimum=0.0)
     rtol = check_float("rtol", rtol, minimum=0.0)
@@ -132,7 +132,10 @@ def _icp(X, Y, rng, *, max_iter, n_control, anneal, tol, rtol, random_state) -> 
         pairs = order[first]
         if len(pairs) < X.shape[1] + 2:
             break  # too few distinct pairs to fit an affine part; keep the last warp
-        spline = fit_tps(Y[c_match[pairs]], X[control[pairs]], smoothing)
+        try:
+            spline = fit_tps(Y[c_match[pairs]], X[control[pairs]], smoothing)
+        except np.linalg.LinAlgError:  # the pairs span too few dimensions for the affine part (a tiny
+            break  # symmetric mesh: its embedding is flat); keep the last warp
         warped = spline(Y)
         result.spline = spline
         new_dist, new_matches = kdtree_query(cKDTree(warped), X)

@@ -94,10 +94,23 @@ def landmark_table(landmarks) -> np.ndarray | None:
                              f"and dtype {table.dtype} instead.")
     whole = table.dtype.kind in "iu" or (table.dtype.kind == "f" and bool(np.all(np.isfinite(table)))
                                          and bool(np.all(table == np.round(table))))
+    if whole and _has_bool(landmarks):  # numpy took (True, 3) for (1, 3)
+        raise ParameterError("Landmark indices must be whole numbers (0-based vertex indices), not True or "
+                             f"False; got {list(landmarks)[:4]}.")
     if not whole:
         raise ParameterError("Landmark indices must be whole numbers (0-based vertex indices); got "
                              f"{table.reshape(-1)[:4].tolist()}...")
     return table.astype(np.int64)
+
+
+def _has_bool(landmarks) -> bool:
+    """Whether a sequence of pairs (not an array: numpy's bool arrays are no whole numbers) holds a bool."""
+    if isinstance(landmarks, np.ndarray):
+        return False
+    try:
+        return any(isinstance(value, (bool, np.bool_)) for pair in landmarks for value in pair)
+    except TypeError:
+        return False
 
 
 def check_landmarks(landmarks, source: Mesh, target: Mesh) -> np.ndarray | None:

@@ -132,3 +132,46 @@ def test_ctrl_c_during_a_kdtree_query_leaves_no_query_thread():
     out = subprocess.run([sys.executable, "-c", QUERY], capture_output=True, text=True, timeout=120)
     assert out.returncode == 0, out.stderr[-2000:]
     assert out.stdout.strip() == "interrupted []"
+
+
+# SIGTERM arrives while the map is being written: the writer's fsync sends it (issue 31, item 15).
+TERM_WHILE_WRITING = textwrap.dedent("""
+    import os, signal, sys
+    import meshcorr.io.files as files
+    from meshcorr.cli import main
+
+    real_fsync = files.os.fsync
+
+    def fsync(fd):
+        real_fsync(fd)
+        os.kill(os.getpid(), signal.SIGTERM)
+
+    files.os.fsync = fsync
+    code = main(["match", sys.argv[1], sys.argv[2], "-o", os.path.join(sys.argv[3], "map.txt")])
+    print(code, sorted(os.listdir(sys.argv[3])))
+""")
+
+
+def test_sigterm_while_the_map_is_written_exits_143_and_leaves_no_temporary_file(meshes, tmp_path):
+    out = subprocess.run([sys.executable, "-c", TERM_WHILE_WRITING, *meshes, str(tmp_path)], capture_output=True,
+                         text=True, timeout=120)
+    assert out.returncode == 0, (out.returncode, out.stderr[-2000:], os.listdir(tmp_path))
+    assert out.stdout.strip().splitlines()[-1] == "143 []"
+    assert out.stderr.strip().splitlines()[-1] == "meshcorr: terminated" and "Traceback" not in out.stderr
+
+
+def test_sigterm_to_a_batch_writes_its_summary_and_exits_143(meshes, tmp_path):
+    pytest.importorskip("distributed")
+    a, b = meshes
+    proc = subprocess.Popen([sys.executable, "-m", "meshcorr", "batch", "--all-pairs", a, b, "--workers", "1",
+                             "--out", str(tmp_path / "out")], stderr=subprocess.PIPE, text=True)
+    for line in proc.stderr:  # the first progress line: the cluster runs and the pairs are submitted
+        if line.startswith("[batch]"):
+            break
+    proc.send_signal(signal.SIGTERM)
+    rest = proc.stderr.read()
+    assert proc.wait(timeout=60) == 143, rest
+    assert "Traceback" not in rest and rest.strip().splitlines()[-1] == "meshcorr: terminated", rest
+    assert (tmp_path / "out" / "summary.json").is_file()
+    left = [p.name for p in (tmp_path / "out").rglob("*") if p.name.endswith(".tmp")]
+    assert left == []

@@ -534,3 +534,95 @@ def test_a_pair_that_crashes_its_worker_is_recorded(shapes, tmp_path, monkeypatc
     assert "KilledWorker" in records[0]["error"] and records[0]["map"].endswith("c0__c1.txt")
     summary = json.loads((tmp_path / "summary.json").read_text())
     assert summary["n_failed"] == 2
+
+
+def test_a_rerun_redoes_a_mesh_changed_in_place_and_a_damaged_map(cluster, shapes, tmp_path):
+    # Issue 31, item 3: the pairs are known by their files' content, and a map file must be whole.
+    import os
+    import shutil
+
+    paths, _ = shapes
+    local = []
+    for path in paths[:3]:
+        local.append(str(tmp_path / Path(path).name))
+        shutil.copy(path, local[-1])
+    pairs = template_pairs(local[0], local)
+    out = tmp_path / "out"
+    first = batch(pairs, out, client=cluster)
+    assert all(r["map_length"] == 500 for r in json.loads((out / "summary.json").read_text())["pairs"])
+    # Another digit in a vertex of the third shape: the same size, and its modification time put back.
+    changed = Path(local[2])
+    before, text = changed.stat(), changed.read_text()
+    line = text.splitlines()[2]
+    digit = next(i for i, c in enumerate(line) if c in "12345678")
+    edited = line[:digit] + str(int(line[digit]) + 1) + line[digit + 1:]
+    changed.write_text(text.replace(line, edited, 1))
+    os.utime(changed, ns=(before.st_atime_ns, before.st_mtime_ns))
+    assert changed.stat().st_size == before.st_size and changed.stat().st_mtime_ns == before.st_mtime_ns
+    totals = []
+    records = batch(pairs, out, client=cluster, progress=lambda d, t, f, s: totals.append(t))
+    assert totals[0] == 1 and [r["status"] for r in records] == ["ok", "ok"]
+    np.testing.assert_array_equal(read_map(records[1]["map"]), meshcorr.match(local[0], local[2]).map)
+    # A map file cut short (a full disk, a killed copy), here within a line, or emptied: matched again.
+    whole = Path(first[0]["map"]).read_text()
+    for damaged in (whole[:len(whole) // 2 + 1], ""):
+        Path(first[0]["map"]).write_text(damaged)
+        totals.clear()
+        records = batch(pairs, out, client=cluster, progress=lambda d, t, f, s: totals.append(t))
+        assert totals[0] == 1 and records[0]["status"] == "ok"
+        assert Path(first[0]["map"]).read_text() == whole
+
+
+def test_a_second_batch_into_a_folder_in_use_is_refused(shapes, tmp_path, capsys):
+    # Issue 31, item 4: both ran, and the summary kept the records of the last one to write it.
+    from meshcorr.collection.folder import output_lock
+    from meshcorr.errors import OutputError
+
+    paths, _ = shapes
+    (tmp_path / "maps").mkdir()
+    with output_lock(tmp_path):  # another batch runs into the folder
+        with pytest.raises(OutputError, match="Another meshcorr batch is writing into"):
+            batch(all_pairs(paths[:2]), tmp_path)
+        assert main(["batch", "--all-pairs", *paths[:2], "--out", str(tmp_path)]) == 2
+        assert "Another meshcorr batch is writing into" in capsys.readouterr().err
+    assert not (tmp_path / "summary.json").exists() and not (tmp_path / "run.json").exists()
+    with output_lock(tmp_path):  # released by the refused runs, and by the one that held it
+        pass
+
+
+def test_an_interrupted_batch_leaves_no_map_its_summary_does_not_list(cluster, shapes, tmp_path):
+    # Issue 31, item 5: the pairs still running on the cluster's workers when the batch is interrupted
+    # finished there later and wrote maps that the summary, already written, did not list.
+    import time
+
+    paths, _ = shapes
+    pairs = template_pairs(paths[0], paths)
+
+    def stop_after_one(done, total, failed, left):
+        if done == 1:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        batch(pairs, tmp_path, client=cluster, progress=stop_after_one)
+    deadline = time.monotonic() + 60  # until the workers are idle: what was running has finished
+    while sum(cluster.run(lambda dask_worker: dask_worker.state.executing_count).values()) and \
+            time.monotonic() < deadline:
+        time.sleep(0.2)
+    time.sleep(0.5)
+    recorded = {Path(r["map"]).name for r in json.loads((tmp_path / "summary.json").read_text())["pairs"]
+                if r["status"] == "ok"}
+    assert len(recorded) == 1
+    assert sorted(p.name for p in (tmp_path / "maps").iterdir()) == sorted(recorded)
+
+
+def test_a_cache_folder_that_cannot_be_written_warns_once_and_the_pairs_are_mapped(cluster, shapes, tmp_path):
+    # Issue 31, item 12: every pair failed (its shapes could not be stored).
+    from meshcorr.shapes.cache import CacheWarning
+
+    paths, _ = shapes
+    (tmp_path / "file").write_text("x")
+    with pytest.warns(CacheWarning, match="batch runs without the cache") as caught:
+        records = batch(template_pairs(paths[0], paths[:3]), tmp_path / "out", client=cluster,
+                        cache=tmp_path / "file" / "cache")
+    assert len([w for w in caught if issubclass(w.category, CacheWarning)]) == 1
+    assert [r["status"] for r in records] == ["ok", "ok"]

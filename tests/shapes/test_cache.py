@@ -111,3 +111,63 @@ def test_bad_cache_arguments(tmp_path, capsys):
         ShapeCache(tmp_path / "file")
     assert main(["cache", "info", "--dir", str(tmp_path / "file")]) == 2
     assert "is a file" in capsys.readouterr().err
+
+
+def _with_raw_member(path, member: str) -> None:
+    """Rewrite the ``.npz`` at ``path`` with ``member`` stored as raw bytes (no ``.npy``): NumPy then hands
+    back bytes for it, not an array."""
+    import io
+    import zipfile
+
+    with np.load(path) as data:
+        arrays = {name: data[name] for name in data.files}
+    buffer = io.BytesIO()
+    with zipfile.ZipFile(buffer, "w") as archive:
+        for name, array in arrays.items():
+            if name == member:
+                archive.writestr(name, b"not an array")
+            else:
+                item = io.BytesIO()
+                np.save(item, array)
+                archive.writestr(f"{name}.npy", item.getvalue())
+    path.write_bytes(buffer.getvalue())
+
+
+@pytest.mark.parametrize("member", ["header", "spectrum.embedding"])
+def test_a_cache_entry_whose_member_is_no_array_is_prepared_again(mesh, tmp_path, member):
+    cache = ShapeCache(tmp_path)
+    complete = cache.prepare(mesh, SHAPE_SETTINGS, "dense")
+    path = cache.files()[0]
+    _with_raw_member(path, member)
+    with pytest.raises(PreparedShapeError, match=f"member '{member}' is not an array"):
+        PreparedShape.load(path)
+    assert cache.get(mesh, SHAPE_SETTINGS, "dense") is None  # was an AttributeError (header) or a bad shape
+    again = cache.prepare(mesh, SHAPE_SETTINGS, "dense")  # repaired: replaced by a complete file
+    np.testing.assert_array_equal(again.spectrum.embedding, complete.spectrum.embedding)
+    assert PreparedShape.load(path).digest == complete.digest
+
+
+def test_a_cache_folder_that_cannot_be_written_is_told_and_its_shapes_still_prepared(mesh, tmp_path, monkeypatch):
+    from meshcorr.errors import OutputError
+    from meshcorr.shapes.cache import CacheWarning
+
+    (tmp_path / "file").write_text("x")
+    cache = ShapeCache(tmp_path / "file" / "cache")  # its parent is a regular file: nothing can be made there
+    with pytest.raises(OutputError, match="cache folder .*file/cache cannot be written"):
+        cache.check_writable()
+    with pytest.warns(CacheWarning, match="could not be stored in the cache"):
+        shape = cache.prepare(mesh, SHAPE_SETTINGS, "dense")
+    np.testing.assert_array_equal(shape.spectrum.embedding, prepare(mesh).spectrum.embedding)
+    # A full disk: the probe's byte cannot be written.
+    full = ShapeCache(tmp_path / "full")
+
+    def no_space(fd, data):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("meshcorr.shapes.cache.os.write", no_space)
+    with pytest.raises(OutputError, match="No space left on device"):
+        full.check_writable()
+    assert not [p for p in (tmp_path / "full").iterdir()]  # the probe is removed
+    monkeypatch.undo()
+    ShapeCache(tmp_path / "ok").check_writable()
+    assert list((tmp_path / "ok").iterdir()) == []

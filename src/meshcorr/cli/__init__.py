@@ -15,6 +15,7 @@ from .. import __version__
 from ..errors import MeshcorrError, MeshWarning
 from ..io import quiet_trimesh
 from ..io.files import DISK_FULL, disk_full_message
+from ..runtime.interrupt import Terminated
 from . import batch as _batch
 from . import bench as _bench
 from . import cache as _cache
@@ -26,7 +27,8 @@ from . import show as _show
 from . import transfer as _transfer
 from ._signals import interrupt_once
 from .exits import (EXIT_BROKEN_PIPE, EXIT_CODES, EXIT_ERROR, EXIT_FAILED_RUNS, EXIT_INPUT,  # noqa: F401 - the
-                    EXIT_INTERRUPTED, EXIT_OK, EXIT_USAGE, exit_code)  # codes' home before cli.exits
+                    EXIT_INTERRUPTED, EXIT_OK, EXIT_TERMINATED, EXIT_USAGE,  # codes' home before cli.exits
+                    exit_code)
 
 #: Sub-command modules, in the order ``--help`` lists them.
 COMMANDS = [_match, _evaluate, _bench, _show, _transfer, _maps, _embed, _batch, _cache]
@@ -73,7 +75,7 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``meshcorr`` console script.
 
     ``argv=None`` runs the process's own command line: the run then owns
-    the process's SIGINT handling to its end (:func:`._signals.interrupt_once`).
+    the process's SIGINT and SIGTERM handling to its end (:func:`._signals.interrupt_once`).
     """
     with interrupt_once(ignore_after=argv is None):
         args = None
@@ -99,6 +101,9 @@ def main(argv: list[str] | None = None) -> int:
             print("meshcorr: error: out of memory. The dense pipeline stores n x n matrices; "
                   "use smaller meshes (decimate them) or a machine with more memory.", file=sys.stderr)
             return EXIT_ERROR
+        except Terminated:  # SIGTERM: the same cleanup as Ctrl-C
+            print("meshcorr: terminated", file=sys.stderr)
+            return EXIT_TERMINATED
         except KeyboardInterrupt:
             print("meshcorr: interrupted", file=sys.stderr)
             return EXIT_INTERRUPTED

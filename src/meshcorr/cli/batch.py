@@ -33,9 +33,13 @@ map is indexed by T's vertices).
 --out DIR receives maps/SOURCE__TARGET.txt (line i: the TARGET vertex of SOURCE
 vertex i) as each pair finishes, summary.json and summary.csv (per pair:
 status, seconds, the error with --gt) and run.json (the settings). A rerun
-with the same --out skips the pairs done (not those whose mesh files changed
-or whose --gt differs); a failed pair (e.g. a bad mesh) is
-recorded and the others go on. Exit code: 0 if every pair was mapped, 4 if
+with the same --out skips the pairs done (not those whose mesh files' content
+changed, whose --gt differs or whose map file is damaged or cut short); a
+failed pair (e.g. a bad mesh) is recorded and the others go on. One batch at a
+time writes into a folder: a second one into the same --out is refused (exit
+2). A --cache folder that cannot be written is warned about once and the batch
+runs without it. Ctrl-C or SIGTERM stops the batch (exit 130 or 143) with the
+maps finished so far recorded. Exit code: 0 if every pair was mapped, 4 if
 any failed. With --all-pairs, --consistency also reports the cycle-consistency
 error and writes maps made consistent through the collection (see
 meshcorr.collection.consistency).

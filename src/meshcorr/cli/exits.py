@@ -14,6 +14,7 @@ EXIT_USAGE = 2  # bad usage: an unknown flag, a bad option value, an output that
 EXIT_INPUT = 3  # bad input data: a mesh, map or ground-truth file that cannot be used; or a full disk
 EXIT_FAILED_RUNS = 4  # 'bench', 'batch': some runs failed (recorded in their results)
 EXIT_INTERRUPTED = 130  # Ctrl-C (SIGINT); no output file is left behind
+EXIT_TERMINATED = 143  # SIGTERM (kill, a job scheduler's time limit), as 128 + 15; handled as Ctrl-C
 EXIT_BROKEN_PIPE = 141  # stdout closed early (piped into 'head'), as 128 + SIGPIPE
 
 EXIT_CODES = f"""\
@@ -25,6 +26,7 @@ exit codes:
        or the disk (or quota) was full while writing an output (a file: none is left)
   {EXIT_FAILED_RUNS}    bench, batch: some runs failed (recorded in their results)
   {EXIT_INTERRUPTED}  interrupted (Ctrl-C); no output file is written (batch keeps the maps it finished)
+  {EXIT_TERMINATED}  terminated (SIGTERM), as interrupted
   {EXIT_BROKEN_PIPE}  stdout was closed early (e.g. piped into head)
 """
 

@@ -6,15 +6,19 @@ per pair (:func:`meshcorr.match` of the two prepared shapes), each pair
 depending on the futures of its two shapes: a prepared shape travels to a
 worker once, when Dask first needs it there, not once per pair (it pickles
 as its ``.npz`` file, :meth:`~meshcorr.shapes.prepared.PreparedShape.to_bytes`).
-The workers write each map themselves (atomically) and return a small
-record; the caller streams finished pairs (``as_completed``) into
-``summary.json`` and ``summary.csv``, rewritten atomically every
-:data:`SUMMARY_EVERY` seconds and at the end (also when interrupted).
+The workers return each pair's record with its map; the caller streams
+finished pairs (``as_completed``), writes each map (atomically) and records
+it in ``summary.json`` and ``summary.csv``, rewritten atomically every
+:data:`SUMMARY_EVERY` seconds and at the end (also when interrupted, after
+cancelling the pairs not finished: a pair that a worker finishes later writes
+nothing, so every map file of the folder is in its summary). One run at a
+time writes into a folder (:func:`~meshcorr.collection.folder.output_lock`).
 
-Task keys are derived from the file (path, size, modification time) and the
-settings, so a rerun into the same folder is idempotent: pairs recorded as
-done whose map exists are skipped, the others (failed, or never finished
-because the run was killed) run again. A folder holding results made with
+Task keys are derived from the files (path and SHA-256 of the content) and
+the settings, so a rerun into the same folder is idempotent: pairs recorded
+as done whose map file is complete (readable, of the recorded length) are
+skipped, the others (failed, never finished because the run was killed, a
+mesh changed, a map file damaged) run again. A folder holding results made with
 other settings is refused. A pair that fails (unreadable or unsuitable mesh,
 any error) is a record with ``status="failed"`` and its error; it never
 stops the batch.
@@ -49,6 +53,7 @@ from __future__ import annotations
 
 import os
 import time
+import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from itertools import chain
@@ -60,10 +65,12 @@ from ..evaluation.run_settings import check_run_settings
 from ..pipeline.settings import Settings
 from ..runtime.messages import one_line
 from .cluster import import_distributed, local_client
-from .options import cache_root, jsonable, split_options, task_key
+from .folder import output_lock
+from .options import jsonable, split_options, task_key
 from .pairs import all_pairs, map_name
-from .summary import DONE, in_order, made_how, new_record, read_summary, write_summary
-from .tasks import compose_task, dna_task, invert_task, pair_task, prepare_task
+from .summary import (DONE, in_order, made_how, map_complete, new_record, read_summary, write_record_map,
+                      write_summary)
+from .tasks import MAPPING, compose_task, dna_task, invert_task, pair_task, prepare_task
 
 __all__ = ["BatchProgress", "SUMMARY_EVERY", "batch"]
 
@@ -131,7 +138,12 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
         same map file, an output folder holding results of other settings,
         or a ``hub`` that is not one of the shapes of every ordered pair.
     OutputError
-        The output folder cannot be created.
+        The output folder cannot be created, or another batch is writing into it.
+
+    Warns
+    -----
+    CacheWarning
+        The ``cache`` folder cannot be written: the batch runs without it.
     """
     distributed = import_distributed()
     settings, options = split_options(options)
@@ -141,20 +153,25 @@ def batch(pairs: Sequence[tuple[str, str]], out_dir, *, client=None, ground_trut
     hub = None if hub is None else _check_hub(hub, pairs, options)
     _check_cluster(client, n_workers, pairs, out_dir)
     out = _output_folder(out_dir)
-    root = None if cache is None else str(cache_root(cache))
-    run = _Run.open(out, pairs, settings, options, ground_truth, hub)
-    if not run.todo:  # all done before: no cluster to start
-        if progress is not None:
-            progress(0, 0, 0, None)
-        write_summary(out, in_order(run.records, pairs))
+    with output_lock(out):  # one run at a time into a folder: each rewrites the summary from its records
+        root = None if cache is None else _writable_cache(cache)
+        run = _Run.open(out, pairs, settings, options, ground_truth, hub)
+        if not run.todo:  # all done before: no cluster to start
+            if progress is not None:
+                progress(0, 0, 0, None)
+            write_summary(out, in_order(run.records, pairs))
+            return run.results()
+        try:
+            with _client(distributed, client, n_workers) as dask_client:
+                futures, n_matched = _submit(dask_client, run, root)
+                try:
+                    _collect(distributed, futures, n_matched, run, progress)
+                except BaseException:  # Ctrl-C, SIGTERM: the cluster (maybe another's) stops the pairs left
+                    _cancel(dask_client, futures)
+                    raise
+        finally:  # after an interruption too: a rerun skips what is recorded
+            write_summary(out, in_order(run.records, pairs))
         return run.results()
-    try:
-        with _client(distributed, client, n_workers) as dask_client:
-            futures, n_matched = _submit(dask_client, run, root)
-            _collect(distributed, futures, n_matched, run, progress)
-    finally:  # after an interruption too: a rerun skips what is recorded
-        write_summary(out, in_order(run.records, pairs))
-    return run.results()
 
 
 @dataclass
@@ -173,6 +190,7 @@ class _Run:
     hub: str | None
     records: dict  # (source, target) -> record
     todo: list = field(default_factory=list)
+    digests: dict = field(default_factory=dict)  # mesh path -> SHA-256 of its file, read once a run
 
     @property
     def matching(self) -> Settings:
@@ -191,13 +209,17 @@ class _Run:
         return self
 
     def inputs(self, a: str, b: str) -> str:
-        """What a pair's map was made from: both files (path, size, modification time), the options, the truth."""
-        return task_key(a + chr(0) + b, self.settings, self.options, self.ground_truth)
+        """What a pair's map was made from: both files (path and content), the options, the truth."""
+        return task_key(a + chr(0) + b, self.settings, self.options, self.ground_truth, digests=self.digests)
+
+    def shape_key(self, kind: str, path: str) -> str:
+        """The Dask key of the task ``kind`` ("prepare", "dna") of one shape: its file and the settings."""
+        return f"{kind}-{task_key(path, self.settings, self.options, digests=self.digests)}"
 
     def done_before(self, a: str, b: str) -> bool:
         record = self.records.get((a, b), {})
-        if record.get("status") != DONE or not (self.out / "maps" / map_name(a, b)).is_file():
-            return False
+        if record.get("status") != DONE or not map_complete(dict(record, map=self.map_path(a, b))):
+            return False  # not done, or its map file gone, cut short or damaged: again
         key = self.inputs(a, b)
         return record.get("inputs", key) == key  # a changed mesh or --gt: again (older records lack the key)
 
@@ -207,7 +229,7 @@ class _Run:
     def key(self, kind: str, a: str, b: str, *extra) -> str:
         """The Dask key of the task ``kind`` ("match", "invert", "compose") of a pair."""
         made_of = (self.settings, self.options, self.ground_truth, self.map_path(a, b), *extra)
-        return f"{kind}-{task_key(a + chr(0) + b, *made_of)}"
+        return f"{kind}-{task_key(a + chr(0) + b, *made_of, digests=self.digests)}"
 
     def made(self, pair: tuple[str, str], futures: dict):
         """The future of a map made in this run, else its record from an earlier run (or None)."""
@@ -277,10 +299,10 @@ def _submit(dask_client, run: _Run, cache: str | None) -> tuple[dict, int]:
     wanted = {p for pair in (run.pairs if run.hub == "auto" else run.todo) for p in pair}
     matching = run.matching
     shapes = {path: dask_client.submit(prepare_task, path, matching, cache,
-                                       key=f"prepare-{task_key(path, run.settings, run.options)}")
+                                       key=run.shape_key("prepare", path))
               for path in sorted(wanted)}
     if run.hub == "auto":
-        run.hub = _auto_hub(dask_client, shapes, run.settings, run.options)
+        run.hub = _auto_hub(dask_client, shapes, run)
 
     def todo(how: str) -> list[tuple[str, str]]:
         return [(a, b) for a, b in run.todo if made_how(a, b, run.hub) == how]
@@ -314,6 +336,8 @@ def _collect(distributed, futures: dict, n_matched: int, run: _Run, progress: Ba
         except Exception as exc:  # noqa: BLE001 - e.g. KilledWorker: the pair crashed its worker
             record = dict(new_record(*futures[future], run.hub), error=one_line(exc))
         future.release()
+        # Written here, not on the worker: no map appears that the summary written at the end does not list.
+        write_record_map(record, record.pop(MAPPING, None))
         record["inputs"] = run.inputs(record["source"], record["target"])
         run.records[(record["source"], record["target"])] = record
         done, failed = done + 1, failed + (record["status"] != DONE)
@@ -323,6 +347,34 @@ def _collect(distributed, futures: dict, n_matched: int, run: _Run, progress: Ba
             written = time.perf_counter()
         if progress is not None:
             progress(done, total, failed, eta.seconds_left())
+
+
+def _cancel(dask_client, futures: dict) -> None:
+    """Cancel the pairs not finished, so that the cluster's workers do not go on with them."""
+    pending = [future for future in futures if not future.done()]
+    try:
+        if pending:
+            dask_client.cancel(pending)
+    except Exception:  # noqa: BLE001 - a scheduler gone already: nothing left to cancel
+        pass
+
+
+def _writable_cache(cache) -> str | None:
+    """The cache's folder, or None (with a :class:`~meshcorr.shapes.cache.CacheWarning`) if it cannot be written.
+
+    Checked once before any work: a read-only or full cache folder would otherwise fail no pair but warn
+    (and lose the time of a write) for every shape.
+    """
+    from ..shapes.cache import CacheWarning, as_cache
+
+    shapes = as_cache(cache)
+    try:
+        shapes.check_writable()
+    except OutputError as exc:
+        warnings.warn(f"{exc} The batch runs without the cache: every shape is prepared and none is kept. "
+                      "Give --cache a folder that can be written to keep them.", CacheWarning, stacklevel=3)
+        return None
+    return str(shapes.root)
 
 
 @contextmanager
@@ -377,7 +429,7 @@ def _check_hub(hub: str, pairs: list[tuple[str, str]], options: dict) -> str:
     return same[0]
 
 
-def _auto_hub(dask_client, shape_keys: dict, settings: dict, options: dict) -> str:
+def _auto_hub(dask_client, shape_keys: dict, run: _Run) -> str:
     """The shapes' spectral medoid (:func:`~meshcorr.collection.consistency.spectral_medoid`) by their Shape-DNA.
 
     The Shape-DNA of each prepared shape is computed on the workers; a shape
@@ -386,7 +438,7 @@ def _auto_hub(dask_client, shape_keys: dict, settings: dict, options: dict) -> s
     from .consistency import spectral_medoid
 
     paths = sorted(shape_keys)
-    dna = dask_client.gather([dask_client.submit(dna_task, shape_keys[p], settings,
-                                                 key=f"dna-{task_key(p, settings, options)}") for p in paths])
+    dna = dask_client.gather([dask_client.submit(dna_task, shape_keys[p], run.settings, key=run.shape_key("dna", p))
+                              for p in paths])
     known = {p: d for p, d in zip(paths, dna) if d is not None}
     return spectral_medoid(known) if known else paths[0]  # no shape prepared: every pair fails anyway

@@ -2,8 +2,10 @@
 
 :func:`split_options` checks every option as :func:`meshcorr.match` would,
 before any work; :func:`task_key` names what a map is made from (its mesh
-files' path, size and modification time, and the settings), so that a rerun
-into the same folder knows which maps still hold.
+files' path and content, :func:`file_digest`, and the settings), so that a
+rerun into the same folder knows which maps still hold: a mesh changed in
+place keeps its size and modification time only if it is made to, its
+SHA-256 never.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from ..core.holes import fills
 from ..errors import ParameterError
 from ..pipeline.settings import SHAPE_SETTINGS, shape_settings
 
-__all__ = ["cache_root", "jsonable", "split_options", "task_key"]
+__all__ = ["cache_root", "file_digest", "jsonable", "split_options", "task_key"]
 
 
 def split_options(options: dict) -> tuple[dict, dict]:
@@ -67,16 +69,27 @@ def jsonable(options: dict) -> dict:
             for key, value in sorted(options.items())}
 
 
-def task_key(text: str, *parts) -> str:
-    """A deterministic key: the file's path, size and modification time (each path in ``text``) and the settings."""
-    stats = []
+def file_digest(path: str) -> str | None:
+    """SHA-256 (hex) of a file's bytes (as ``meshcorr bench`` records its meshes), or None if it cannot be read."""
+    try:
+        with open(path, "rb") as file:
+            return hashlib.file_digest(file, "sha256").hexdigest()
+    except OSError:
+        return None
+
+
+def task_key(text: str, *parts, digests: dict | None = None) -> str:
+    """A deterministic key: each file's path and content (each path in ``text``) and the settings.
+
+    ``digests`` (path -> :func:`file_digest`), kept by the caller, saves reading a file twice.
+    """
+    digests = {} if digests is None else digests
+    files = []
     for path in text.split(chr(0)):
-        try:
-            info = os.stat(path)
-            stats.append([os.path.abspath(path), info.st_size, info.st_mtime_ns])
-        except OSError:
-            stats.append([path])
-    payload = json.dumps([stats, [jsonable(p) if isinstance(p, dict) else p for p in parts]], sort_keys=True)
+        if path not in digests:
+            digests[path] = file_digest(path)
+        files.append([os.path.abspath(path), digests[path]] if digests[path] is not None else [path])
+    payload = json.dumps([files, [jsonable(p) if isinstance(p, dict) else p for p in parts]], sort_keys=True)
     return hashlib.sha256(payload.encode()).hexdigest()[:24]
 
 

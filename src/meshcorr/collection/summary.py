@@ -4,8 +4,9 @@ A record is a dict: ``source``, ``target``, ``map`` (paths), ``status``
 (:data:`DONE` or :data:`FAILED`), ``seconds``, ``cpu_seconds``,
 ``mean_error``, ``error``, ``made`` (:func:`made_how`) and, for a map made
 through a hub, ``via``. ``summary.json`` keeps them all (and ``inputs``, the
-key of what each map was made from); ``summary.csv`` the columns
-:data:`FIELDS`. Both are rewritten atomically.
+key of what each map was made from, and ``map_length`` and ``map_bytes``, what
+:func:`map_complete` checks of a map file before a rerun skips its pair);
+``summary.csv`` the columns :data:`FIELDS`. Both are rewritten atomically.
 """
 
 from __future__ import annotations
@@ -17,10 +18,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import ParameterError
-from ..io import atomic_write
+from ..errors import MeshcorrError, ParameterError
+from ..io import atomic_write, read_map, write_map
+from ..runtime.messages import one_line
 
-__all__ = ["DONE", "FAILED", "FIELDS", "in_order", "made_how", "new_record", "read_summary", "write_summary"]
+__all__ = ["DONE", "FAILED", "FIELDS", "in_order", "made_how", "map_complete", "new_record", "read_summary",
+           "write_record_map", "write_summary"]
 
 #: Columns of ``summary.csv``.
 FIELDS = ["source", "target", "map", "status", "seconds", "cpu_seconds", "mean_error", "error", "via", "made"]
@@ -85,3 +88,33 @@ def in_order(records: dict, pairs: list[tuple[str, str]]) -> list[dict]:
     """This run's records in its order, then those of earlier runs into the folder for other pairs (kept)."""
     wanted = set(pairs)
     return [records[p] for p in pairs if p in records] + [r for p, r in records.items() if p not in wanted]
+
+
+def write_record_map(record: dict, mapping) -> dict:
+    """Write the map of a done pair's record to ``record["map"]`` (atomically); the record, with its length.
+
+    A map that cannot be written (a full disk) fails the pair: its record says why.
+    """
+    if record["status"] != DONE:
+        return record
+    try:
+        write_map(record["map"], mapping)
+        record["map_length"], record["map_bytes"] = len(mapping), Path(record["map"]).stat().st_size
+    except (MeshcorrError, OSError) as exc:
+        record.update(status=FAILED, error=one_line(exc))
+    return record
+
+
+def map_complete(record: dict) -> bool:
+    """Whether the map file of a done pair's record is whole: there, readable, of the recorded length.
+
+    Records of older runs, without ``map_length`` and ``map_bytes``, need a readable, non-empty map.
+    """
+    path = Path(record["map"])
+    try:
+        if not path.is_file() or path.stat().st_size != record.get("map_bytes", path.stat().st_size):
+            return False
+        mapping = read_map(path)
+    except (MeshcorrError, OSError, ValueError):
+        return False
+    return len(mapping) == record.get("map_length", len(mapping)) and len(mapping) > 0

@@ -1,9 +1,13 @@
 """The tasks of a batch, run on the Dask workers: prepare a shape, match a pair, invert or compose maps.
 
-Each returns something small and picklable: a prepared shape (or the
-one-line error that prevented it), or a pair's record
-(:mod:`meshcorr.collection.summary`) after writing its map itself. A task
-never raises for a bad mesh or a failed pair: the record says so.
+Each returns something picklable: a prepared shape (or the one-line error
+that prevented it), or a pair's record (:mod:`meshcorr.collection.summary`)
+holding its map under :data:`MAPPING`. The tasks write no map file: the
+process that runs the batch writes each one as it records the pair
+(:func:`meshcorr.collection.batch.batch`), so that a pair still running on a
+worker when the batch is interrupted cannot write a map after the summary
+that does not list it. A task never raises for a bad mesh or a failed pair:
+the record says so.
 """
 
 from __future__ import annotations
@@ -23,7 +27,11 @@ from ..shapes.prepared import PreparedShape
 from ..spectral.modes import SCALABLE_ABOVE
 from .summary import DONE, new_record
 
-__all__ = ["compose_task", "dna_task", "invert_task", "mean_error", "pair_task", "prepare_task"]
+__all__ = ["MAPPING", "compose_task", "dna_task", "invert_task", "mapping_of", "mean_error", "pair_task",
+           "prepare_task"]
+
+#: The key of a record returned by a task that holds the map (taken out when the map is written).
+MAPPING = "mapping"
 
 
 def prepare_task(path: str, matching: Settings, cache_root: str | None):
@@ -39,8 +47,7 @@ def prepare_task(path: str, matching: Settings, cache_root: str | None):
 
 def pair_task(source, target, source_path: str, target_path: str, map_path: str, matching: Settings,
               settings: dict, options: dict, ground_truth: str | None) -> dict:
-    """Worker: match two prepared shapes, write the map, return the pair's record."""
-    from ..io import write_map
+    """Worker: match two prepared shapes; the pair's record, with the map under :data:`MAPPING`."""
     from ..pipeline.run import match
 
     record = new_record(source_path, target_path, map_path)
@@ -53,7 +60,7 @@ def pair_task(source, target, source_path: str, target_path: str, map_path: str,
             result = match(source, target, matching)
             record["seconds"] = time.perf_counter() - start
             record["cpu_seconds"] = time.process_time() - cpu  # the worker's CPU time: load-independent
-            write_map(map_path, result.map)
+            record[MAPPING] = result.map
             if ground_truth is not None:
                 record["mean_error"] = mean_error(source, target, result.map, source_path, target_path,
                                                    ground_truth, settings["geodesic"])
@@ -65,9 +72,8 @@ def pair_task(source, target, source_path: str, target_path: str, map_path: str,
 
 def compose_task(source, target, to_hub: dict | None, from_hub: dict | None, source_path: str,
                   target_path: str, hub: str, map_path: str, settings: dict, ground_truth: str | None) -> dict:
-    """Worker: the map source -> hub -> target from the two matched maps' records, written; its record."""
+    """Worker: the map source -> hub -> target from the two matched maps' records; its record."""
     from .consistency import compose
-    from ..io import read_map
 
     record = new_record(source_path, target_path, map_path, hub)
     for step, (a, b) in ((to_hub, (source_path, hub)), (from_hub, (hub, target_path))):
@@ -76,15 +82,14 @@ def compose_task(source, target, to_hub: dict | None, from_hub: dict | None, sou
             record["error"] = f"Composed through the hub: its map {Path(a).name} -> {Path(b).name} {reason}"[:300]
             return record
     # f_HB o f_AH
-    return made_map(record, source, target, lambda: compose(read_map(to_hub["map"]), read_map(from_hub["map"])),
+    return made_map(record, source, target, lambda: compose(mapping_of(to_hub), mapping_of(from_hub)),
                      settings, ground_truth)
 
 
 def invert_task(hub, target, onto_hub: dict | None, hub_path: str, target_path: str, map_path: str,
                  settings: dict, ground_truth: str | None) -> dict:
-    """Worker: the hub's map onto a shape, the inverse of that shape's map onto the hub, written; its record."""
+    """Worker: the hub's map onto a shape, the inverse of that shape's map onto the hub; its record."""
     from .consistency import input_positions, invert
-    from ..io import read_map
 
     record = new_record(hub_path, target_path, map_path, hub_path)
     if onto_hub is None or onto_hub["status"] != DONE:
@@ -94,22 +99,20 @@ def invert_task(hub, target, onto_hub: dict | None, hub_path: str, target_path: 
         return record
 
     def inverse() -> np.ndarray:  # on the hub's own vertices, without the caps of its holes (meshcorr.core.holes)
-        return invert(read_map(onto_hub["map"]), input_positions(unfilled(hub.mesh)))
+        return invert(mapping_of(onto_hub), input_positions(unfilled(hub.mesh)))
 
     return made_map(record, hub, target, inverse, settings, ground_truth)
 
 
 def made_map(record: dict, source, target, make: Callable[[], np.ndarray], settings: dict,
               ground_truth: str | None) -> dict:
-    """Worker: ``make()`` the map of ``record`` from maps already written, write it, score it; the record."""
-    from ..io import write_map
-
+    """Worker: ``make()`` the map of ``record`` from maps already made, score it; the record, with the map."""
     if failed_shape(record, (source, record["source"]), (target, record["target"])):
         return record
     try:
         start, cpu = time.perf_counter(), time.process_time()
         mapping = make()
-        write_map(record["map"], mapping)
+        record[MAPPING] = mapping
         record["seconds"], record["cpu_seconds"] = time.perf_counter() - start, time.process_time() - cpu
         if ground_truth is not None:
             with single_blas_thread():
@@ -119,6 +122,13 @@ def made_map(record: dict, source, target, make: Callable[[], np.ndarray], setti
     except Exception as exc:  # noqa: BLE001 - a failed pair is a record, never the end of the batch
         record["error"] = one_line(exc)
     return record
+
+
+def mapping_of(record: dict) -> np.ndarray:
+    """The map of a done pair's record: the one it holds (made in this run), else its file (an earlier run's)."""
+    from ..io import read_map
+
+    return record[MAPPING] if record.get(MAPPING) is not None else read_map(record["map"])
 
 
 def failed_shape(record: dict, *shapes) -> bool:

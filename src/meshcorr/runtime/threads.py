@@ -81,15 +81,15 @@ def wait_for(event: threading.Event) -> None:
     For waits on worker threads after a failure: leaving before they stop
     would let the interpreter exit under them (module docstring).
     """
-    interrupted = False
+    interrupted = None
     while True:
         try:
             event.wait()
             break
-        except KeyboardInterrupt:
-            interrupted = True
-    if interrupted:
-        raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:  # Ctrl-C, or SIGTERM (runtime.interrupt.Terminated): the first kept
+            interrupted = interrupted or exc
+    if interrupted is not None:
+        raise interrupted
 
 
 def parallel_map(function: Callable[[T], R], items: Iterable[T]) -> list[R]:

@@ -7,8 +7,12 @@ version: a changed mesh, option or version gives another name, never a
 stale hit. A file is written to a temporary name and renamed into place
 (:func:`meshcorr.io.atomic_write`), so several processes may prepare the
 same shape at once: each rename replaces a complete file with an equal one,
-and readers only ever see complete files. A file that cannot be read, or
-whose header disagrees with its name, is prepared again and replaced.
+and readers only ever see complete files. A file that cannot be read (cut
+short, or a member that is no array), or whose header disagrees with its
+name, is prepared again and replaced. A shape that cannot be stored (a
+read-only or full folder) is used all the same, with a :class:`CacheWarning`;
+:meth:`ShapeCache.check_writable` tells before any work whether the folder
+takes files.
 
 The folder is ``$MESHCORR_CACHE`` if set, else ``$XDG_CACHE_HOME/meshcorr``,
 else ``~/.cache/meshcorr``.
@@ -20,9 +24,11 @@ import hashlib
 import json
 import os
 import re
+import tempfile
+import warnings
 from pathlib import Path
 
-from ..errors import ParameterError, PreparedShapeError
+from ..errors import OutputError, ParameterError, PreparedShapeError
 from ..core.mesh import Mesh
 from .prepared import FORMAT_VERSION, PreparedShape, meshcorr_version, mesh_digest, prepare_mesh
 
@@ -32,6 +38,10 @@ SUFFIX = ".npz"
 #: a user's own files in the folder are left alone.
 _CACHE_FILE = re.compile(r"[0-9a-f]{64}" + re.escape(SUFFIX))
 _TEMPORARY_FILE = re.compile(r"\.[0-9a-f]{64}" + re.escape(SUFFIX) + r"\.[0-9a-f]+\.tmp")
+
+
+class CacheWarning(UserWarning):
+    """The cache folder cannot be written: shapes are prepared, and not kept."""
 
 
 def default_cache_dir() -> Path:
@@ -80,9 +90,32 @@ class ShapeCache:
         shape = self.get(mesh, settings, mode)
         if shape is None:
             shape = prepare_mesh(mesh, settings, mode)
-            self.root.mkdir(parents=True, exist_ok=True)
-            shape.save(self.path(self.key(mesh, settings, mode)))
+            try:
+                self.root.mkdir(parents=True, exist_ok=True)
+                shape.save(self.path(self.key(mesh, settings, mode)))
+            except (OutputError, OSError) as exc:  # the cache saves time: a shape it cannot keep is still good
+                warnings.warn(f"The prepared shape {mesh.name!r} could not be stored in the cache {self.root} "
+                              f"({_reason(exc)}); it is used without being kept.", CacheWarning, stacklevel=2)
         return shape
+
+    def check_writable(self) -> None:
+        """Refuse, before any work, a cache folder that cannot be created or take a file (read-only, full).
+
+        Raises
+        ------
+        OutputError
+            Naming the folder and why.
+        """
+        try:
+            self.root.mkdir(parents=True, exist_ok=True)
+            fd, probe = tempfile.mkstemp(dir=self.root, prefix=".probe.", suffix=".tmp")
+            try:
+                os.write(fd, b"x")  # a full disk may still create an empty file
+            finally:
+                os.close(fd)
+                os.unlink(probe)
+        except OSError as exc:
+            raise OutputError(f"The cache folder {self.root} cannot be written ({_reason(exc)}).") from None
 
     def files(self) -> list[Path]:
         """The cache files (complete ones; temporary files of writers under way are not listed, nor a
@@ -119,6 +152,10 @@ def as_cache(cache) -> ShapeCache:
     if isinstance(cache, (str, os.PathLike)):
         return ShapeCache(cache)
     raise ParameterError(f"The 'cache' parameter must be a ShapeCache, a folder path or True. Got {cache!r} instead.")
+
+
+def _reason(exc: BaseException) -> str:
+    return getattr(exc, "strerror", None) or str(exc)
 
 
 def _size(path: Path) -> int:

@@ -192,7 +192,7 @@ class PreparedShape:
         header, arrays = _read(path)
         try:
             prepared = cls._from_arrays(header, arrays)
-        except (KeyError, ValueError, TypeError, IndexError) as exc:  # a header or an array missing or malformed
+        except (KeyError, ValueError, TypeError, IndexError, AttributeError) as exc:  # a header or array malformed
             raise PreparedShapeError(f"{path} is damaged ({type(exc).__name__}: {exc}); prepare the mesh again "
                                      "(meshcorr.prepare) or clear the cache (meshcorr cache clear).") from None
         if mesh is not None:
@@ -352,11 +352,16 @@ def _read(path, *, name: str | None = None) -> tuple[dict, dict]:
     try:
         with np.load(path, allow_pickle=False) as data:
             arrays = {name: data[name] for name in data.files}
+        # NumPy returns a member that is no .npy file as its raw bytes: a damaged file, not an AttributeError.
+        raw = sorted(member for member, value in arrays.items() if not isinstance(value, np.ndarray))
+        if raw:
+            raise ValueError(f"its member {raw[0]!r} is not an array")
         header = json.loads(arrays.pop("header").tobytes().decode())
         version = header["format"]
     except FileNotFoundError:
         raise PreparedShapeError(f"{name} does not exist.") from None
-    except (OSError, ValueError, KeyError, TypeError, UnicodeDecodeError, EOFError, zipfile.BadZipFile) as exc:
+    except (OSError, ValueError, KeyError, TypeError, AttributeError, UnicodeDecodeError, EOFError,
+            zipfile.BadZipFile) as exc:
         # NumPy reads any file that is no archive as pickled data and advises allow_pickle: not for users.
         reason = "it is not an .npz archive" if "pickle" in str(exc) else exc
         raise PreparedShapeError(f"{name} is not a prepared shape written by meshcorr ({reason}); prepare the "

@@ -41,12 +41,12 @@ def test_margin_is_the_energy_ratio_to_the_best_rival_in_decades():
 
 def test_a_close_rival_is_low_confidence_and_named_in_the_message():
     chosen, near, rival = _candidates()
-    energies = {id(chosen): 1e-3, id(near): 2e-3, id(rival): 1.2e-3}
+    energies = {id(chosen): 1e-3, id(near): 2e-3, id(rival): 1e-3 * 10 ** (LOW_MARGIN / 2)}
     result = choice_confidence([chosen, near, rival], chosen, energies, _line_geodesics, _line_geodesics,
                                np.arange(0, N, 3))
     assert result.margin < LOW_MARGIN and result.low
     report = result.to_dict()
-    assert report["low"] and report["rival"] == "extremities-0" and report["margin"] == pytest.approx(0.0792, abs=1e-3)
+    assert report["low"] and report["rival"] == "extremities-0" and report["margin"] == pytest.approx(LOW_MARGIN / 2, abs=1e-4)
     message = unsure_message(report)
     assert "'extremities-0'" in message and "--landmarks" in message
     assert str(report["suggested_landmarks"][0]["source"]) in message

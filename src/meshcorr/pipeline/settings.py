@@ -181,7 +181,9 @@ class Settings:
         Laplace-Beltrami functions' signs, the best by their smooth-shell
         alignment energy (:mod:`meshcorr.choice.sign_search`, after Smooth
         Shells): a wider search for the global configuration, on coarse
-        copies. Used with ``symmetry="auto"``.
+        copies. Used with ``symmetry="auto"``. Off by default: measured better
+        on four-legged animals and worse on people, whose added maps turned
+        front to back the energies cannot reject (docs/method.md).
     partial : {None, "source", "target"}
         None: both shapes are whole (they may have small holes).
         ``"source"``: the source is a part of the target (one side of a scan,

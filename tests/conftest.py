@@ -13,22 +13,34 @@ from meshcorr import datasets as ds
 from meshcorr.core.mesh import as_mesh
 
 
-@pytest.fixture(scope="module")
-def creature_rest_and_bent_moved():
+def rest_and_bent_moved(resolution: int = 1):
     """The creature at rest (source side) and bent, rotated, moved and re-indexed (target side).
 
-    Returns ``(rest, bent, truth, back)``: the two meshes (named "rest" and "bent"), ``truth`` of shape
-    ``(n_rest,)``: source vertex -> its target vertex, and ``back`` of shape ``(n_bent,)``: target vertex
-    -> its source vertex. Used by the tests of holes (meshcorr.core.holes) and partial shapes
-    (meshcorr.pipeline.partial).
+    Returns ``(rest, bent, truth, back)``: the two meshes (named "rest" and "bent"; 500 vertices each at
+    resolution 1, 2000 at 3), ``truth`` of shape ``(n_rest,)``: source vertex -> its target vertex, and
+    ``back`` of shape ``(n_bent,)``: target vertex -> its source vertex.
     """
-    rest = ds.creature(resolution=1)
-    bent = ds.creature(resolution=1, pose="bent", random_state=1)
+    rest = ds.creature(resolution=resolution)
+    bent = ds.creature(resolution=resolution, pose="bent", random_state=1)
     moved, index = ds.rigid_copy(bent, random_state=3)
     truth = index[ds.ground_truth(rest, bent)]
     back = ds.ground_truth(bent, rest)[np.argsort(index)]  # target vertex -> source vertex
     return as_mesh((rest.vertices, rest.faces), name="rest"), as_mesh((moved.vertices, moved.faces), name="bent"), \
         truth, back
+
+
+@pytest.fixture(scope="module")
+def creature_rest_and_bent_moved():
+    """:func:`rest_and_bent_moved` at resolution 1 (500 vertices). Used by the tests of holes
+    (meshcorr.core.holes), partial shapes (meshcorr.pipeline.partial) and the sign search."""
+    return rest_and_bent_moved(1)
+
+
+@pytest.fixture(scope="module")
+def large_creature_rest_and_bent_moved():
+    """:func:`rest_and_bent_moved` at resolution 3 (2000 vertices): large enough for coarse copies of
+    400 vertices (meshcorr.core.coarse, the pipeline's coarse-to-fine path)."""
+    return rest_and_bent_moved(3)
 
 
 @pytest.fixture(scope="module")

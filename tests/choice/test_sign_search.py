@@ -4,11 +4,9 @@ import numpy as np
 import pytest
 
 import meshcorr
-from meshcorr import datasets as ds
 from meshcorr.choice import sign_search
 from meshcorr.choice.sign_search import N_KEPT, sign_search_starts
 from meshcorr.core.map_orientation import orientation_score
-from meshcorr.core.mesh import as_mesh
 from meshcorr.evaluation.metrics import geodesic_errors
 
 
@@ -19,12 +17,8 @@ def fewer_signs(monkeypatch):
 
 
 @pytest.fixture(scope="module")
-def pair():
-    rest = ds.creature(resolution=1)
-    bent = ds.creature(resolution=1, pose="bent", random_state=1)
-    moved, index = ds.rigid_copy(bent, random_state=3)
-    truth = index[ds.ground_truth(rest, bent)]
-    return as_mesh((rest.vertices, rest.faces)), as_mesh((moved.vertices, moved.faces)), truth
+def pair(creature_rest_and_bent_moved):
+    return creature_rest_and_bent_moved[:3]
 
 
 def test_the_best_configuration_is_the_right_map(pair):

@@ -7,23 +7,17 @@ import pytest
 import trimesh
 
 import meshcorr
-from meshcorr import datasets as ds
 from meshcorr.choice import confidence
 from meshcorr.cli import main
-from meshcorr.core.mesh import as_mesh
 from meshcorr.errors import ParameterError, UnsureChoiceWarning
 from meshcorr.evaluation.metrics import geodesic_errors
 from meshcorr.maps.result import Correspondence
 
 
 @pytest.fixture(scope="module")
-def pair():
+def pair(large_creature_rest_and_bent_moved):
     """The creature at rest and bent, moved and re-indexed, 2000 vertices each, and the truth."""
-    rest = ds.creature(resolution=3)
-    bent = ds.creature(resolution=3, pose="bent", random_state=1)
-    moved, index = ds.rigid_copy(bent, random_state=3)
-    truth = index[ds.ground_truth(rest, bent)]
-    return as_mesh((rest.vertices, rest.faces), name="rest"), as_mesh((moved.vertices, moved.faces), name="bent"), truth
+    return large_creature_rest_and_bent_moved[:3]
 
 
 @pytest.fixture(scope="module")

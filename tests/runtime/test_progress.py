@@ -244,6 +244,7 @@ def test_stderr_lines_per_stage_without_a_plan_rise_and_tick():
         progress("geodesic errors", 0, 10)
         progress("geodesic errors", 4, 10)
         progress("geodesic errors", 10, 10)
+        time.sleep(0.2)  # through its sub-steps: no more ticks of it
         progress("drawing", 0, 1)
         time.sleep(0.3)
         progress("drawing", 1, 1)
@@ -251,5 +252,6 @@ def test_stderr_lines_per_stage_without_a_plan_rise_and_tick():
         progress.close()
     lines = _lines(stream)
     assert lines[:3] == ["[geodesic errors]   0% 0 s", "[geodesic errors]  40% 0 s", "[geodesic errors] 100% 0 s"]
+    assert lines[3].startswith("[drawing] ")
     assert len([line for line in lines if line.startswith("[drawing] ")]) >= 2  # ticks, then its end
     assert lines[-1].startswith("[drawing] done in ")

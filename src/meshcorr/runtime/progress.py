@@ -468,8 +468,8 @@ class StderrProgress:
             now = self.clock()
             if now - self._last < self.tick:
                 return
-            if self.plan is None:
-                if self._stage is not None and now - self._start >= self.delay:
+            if self.plan is None:  # a stage running, not yet through its sub-steps
+                if self._stage is not None and self._done[0] < self._done[1] and now - self._start >= self.delay:
                     self._stage_line(now)
             elif self.run is not None:
                 self.run.tick()

@@ -26,11 +26,12 @@ STAGES = ["load", "geodesics", "embedding", "reorder", "symmetry", "icp", "match
 # after the chosen stage starts, with 8 pretended cores and KD-tree queries
 # split from 40 points on, so that worker threads run in every stage.
 CHILD = textwrap.dedent("""
-    import json, os, signal, sys, threading
+    import io, json, os, signal, sys, threading
     signal.signal(signal.SIGINT, signal.default_int_handler)  # even if pytest runs with SIGINT ignored
     import meshcorr.runtime.threads as t
     import meshcorr.cli.match as cli_match
     from meshcorr.cli import main
+    from meshcorr.runtime.progress import StderrProgress
 
     t._cores = lambda: 8
     t.QUERIES_PER_THREAD = 40
@@ -39,12 +40,15 @@ CHILD = textwrap.dedent("""
     for run, (stage, delay) in enumerate(plan):
         fired = []
 
-        def progress(name, done, total, stage=stage, delay=delay, fired=fired):
-            if name == stage and not fired:
-                fired.append(threading.Timer(delay, os.kill, (os.getpid(), signal.SIGINT)))
-                fired[0].start()
+        class Firing(StderrProgress):  # the command's reporter, its ticker thread included
+            def __call__(self, name, done, total, stage=stage, delay=delay, fired=fired):
+                super().__call__(name, done, total)
+                if name == stage and not fired:
+                    fired.append(threading.Timer(delay, os.kill, (os.getpid(), signal.SIGINT)))
+                    fired[0].start()
 
-        cli_match.progress_for = lambda args, label: progress
+        cli_match.progress_for = lambda args, label, run_plan=None: Firing(
+            io.StringIO(), label=label, delay=0.0, plan=run_plan, tick=0.005)
         out = os.path.join(folder, f"map{run}.txt")
         code = main(["match", source, target, "-o", out, "--alternative-out", out + ".alt",
                      "--symmetry", "auto"])

@@ -210,3 +210,23 @@ def test_evaluate_says_an_unreadable_map_or_truth_with_exit_3(tube_files_for_eva
     err = capsys.readouterr().err
     assert err.startswith("meshcorr: error: Cannot read the") and str(locked) in err and "Permission denied" in err
     assert err.count("\n") == 1
+
+
+def test_evaluate_progress_names_each_phase_and_only_rises(tube_files_for_evaluation, tmp_path, capsys, monkeypatch):
+    """Issue 31: the truth's and the mirrored truth's solves ran 39 -> 100 -> 66 -> 100 % under one label."""
+    import meshcorr.cli.match as cli_match
+
+    folder, src, tgt = tube_files_for_evaluation
+    truth = np.loadtxt(folder / "truth.txt", dtype=np.int64)
+    rolled = tmp_path / "shuffled.txt"  # a map off both truths: each needs its own solves
+    np.savetxt(rolled, np.random.default_rng(0).permutation(truth), fmt="%d")
+    reports = []
+    monkeypatch.setattr(cli_match, "progress_for", lambda args, label, plan=None: lambda *r: reports.append(r))
+    assert main(["evaluate", src, tgt, str(rolled), "--gt", str(folder / "a.vts"), "--gt", str(folder / "b.vts"),
+                 "--sym", str(folder / "b.sym.vts"), "--json"]) == 0
+    capsys.readouterr()
+    labels = list(dict.fromkeys(stage for stage, _, _ in reports))
+    assert labels == ["geodesic errors", "geodesic errors (mirrored truth)"]
+    for label in labels:
+        shares = [done / total for stage, done, total in reports if stage == label]
+        assert shares == sorted(shares) and shares[-1] == 1.0, (label, shares)

@@ -2,8 +2,10 @@
 
 import json
 import os
+import re
 import subprocess
 import sys
+import threading
 
 import numpy as np
 import pytest
@@ -230,3 +232,47 @@ def test_unreadable_landmarks_and_truth_are_input_errors_before_the_work(tube_fi
     assert code == 3, err
     assert str(bad) in err and "Traceback" not in err and "internal error" not in err
     assert not (tmp_path / "m.txt").exists() and not (tmp_path / "r.html").exists()
+
+
+def _percentages(err):
+    return [int(m) for m in re.findall(r"\] \[[#-]+\] +(\d+)%", err)]
+
+
+def test_match_progress_is_one_line_for_the_run_that_only_rises(tube_files_with_truth, tmp_path, capsys):
+    src, tgt, _ = tube_files_with_truth
+    assert main(["match", src, tgt, "-o", str(tmp_path / "m.txt"), "-v"]) == 0
+    err = capsys.readouterr().err
+    shares = _percentages(err)
+    assert len(shares) > 5 and shares == sorted(shares) and shares[-1] == 100, err
+    lines = err.splitlines()
+    assert any(line.startswith("meshcorr: source.off -> target.ply [shells] [") for line in lines)
+    done = [line for line in lines if "[done]" in line]
+    assert len(done) == 1 and done[0].startswith("meshcorr: source.off -> target.ply [done] [" + "#" * 24 + "] 100%")
+    assert not [t for t in threading.enumerate() if t.name == "meshcorr-progress"]
+
+
+def test_no_progress_thread_is_left_after_an_error_or_ctrl_c(tube_files_with_truth, tmp_path, capsys, monkeypatch):
+    import meshcorr.cli.match as cli_match
+    from meshcorr.runtime.progress import StderrProgress
+
+    src, tgt, _ = tube_files_with_truth
+    bad = tmp_path / "fan.off"
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0, -1, 0.5]], float)
+    trimesh.Trimesh(V, np.array([[0, 1, 2], [0, 1, 3], [0, 1, 4]]), process=False).export(bad)
+    assert main(["match", str(bad), tgt, "-o", str(tmp_path / "a.txt"), "-v"]) != 0  # fails in "load"
+    assert "[load]" in capsys.readouterr().err
+    assert not [t for t in threading.enumerate() if t.name == "meshcorr-progress"]
+
+    class Interrupting(StderrProgress):
+        def __call__(self, stage, done, total):
+            super().__call__(stage, done, total)
+            assert self._ticker is not None and self._ticker.is_alive()
+            if stage == "reorder":
+                raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli_match, "progress_for", lambda args, label, plan=None: Interrupting(
+        sys.stderr, label=label, delay=0.0, plan=plan, tick=0.01))
+    assert main(["match", src, tgt, "-o", str(tmp_path / "b.txt")]) == 130
+    assert "meshcorr: interrupted" in capsys.readouterr().err
+    assert not [t for t in threading.enumerate() if t.name == "meshcorr-progress"]
+    assert not (tmp_path / "b.txt").exists()

@@ -6,7 +6,7 @@ import argparse
 import sys
 
 from ..core.geodesics import GEODESIC_METHODS
-from .match import progress_for, seed
+from .match import reporting, seed
 from .show import add_camera_arguments, check_png
 
 HELP = "draw a mesh's affinity eigenvectors and its 3-D spectral embedding as a PNG"
@@ -92,10 +92,10 @@ def run(args) -> int:
         print(f"meshcorr: {args.mesh}: computing the {mesh.n_vertices} x {mesh.n_vertices} geodesic and "
               "affinity matrices and their eigenvectors...", file=sys.stderr)
     vertices, faces = mesh.vertices, mesh.faces
-    progress = progress_for(args, args.mesh)
-    values = spectrum_figure(vertices, faces, args.output, n_eigenvectors=args.n_eigenvectors,
-                             geodesic=args.geodesic, scale=args.scale, random_state=args.seed,
-                             elev=args.elev, azim=args.azim, up=args.up, dpi=args.dpi, progress=progress)
+    with reporting(args, args.mesh) as progress:
+        values = spectrum_figure(vertices, faces, args.output, n_eigenvectors=args.n_eigenvectors,
+                                 geodesic=args.geodesic, scale=args.scale, random_state=args.seed,
+                                 elev=args.elev, azim=args.azim, up=args.up, dpi=args.dpi, progress=progress)
     listed = ", ".join(f"{v:.4g}" for v in values[:args.n_eigenvectors])
     if not args.quiet:
         print(f"meshcorr: wrote {args.output}; eigenvalues: {listed}", file=sys.stderr)

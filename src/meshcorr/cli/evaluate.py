@@ -132,16 +132,18 @@ def _finite(value):
 def run(args) -> int:
     from ..core.mesh import Mesh
     from ..evaluation.metrics import GeodesicCache, cumulative_curve, evaluate_map, map_quality, scalar_summary
-    from .match import progress_for
+    from .match import reporting
 
     thresholds = _thresholds(args.thresholds)
     if args.curve:
         _check_curve(args)
     source, target, mapping, truth, sym = _read_inputs(args)
     # The geodesic solves take minutes on a large TARGET with a dense truth: say how far they are.
-    cache = GeodesicCache(args.geodesic, progress=progress_for(args, f"{args.map} on {args.target}"))
-    report = evaluate_map(target, mapping, truth, sym_truth=sym, thresholds=thresholds,
-                          geodesic=args.geodesic, cache=cache)
+    # A phase per truth, each with its own label ("geodesic errors", then "... (mirrored truth)").
+    with reporting(args, f"{args.map} on {args.target}") as progress:
+        cache = GeodesicCache(args.geodesic, progress=progress)
+        report = evaluate_map(target, mapping, truth, sym_truth=sym, thresholds=thresholds,
+                              geodesic=args.geodesic, cache=cache)
     summary = scalar_summary(report)
     summary.update(map_quality(Mesh(*source, name=args.source), target, mapping))
     summary.update(source=args.source, target=args.target, map=args.map, geodesic=args.geodesic)

@@ -18,7 +18,7 @@ from ..spectral.modes import MODES
 from ..pipeline.settings import Settings
 from ..stages.reorder import REORDER_MODES
 from ._mapfile import print_map
-from ..runtime.progress import StderrProgress
+from ..runtime.progress import MATCH_PLAN, RunPlan, StderrProgress
 
 HELP = "compute the vertex map from SOURCE to TARGET"
 
@@ -196,11 +196,28 @@ def check_output_path(path: str, what: str = "the output") -> None:
     check_outputs({what: path})
 
 
-def progress_for(args, label: str) -> StderrProgress | None:
-    """The progress callback of ``-q`` / default / ``-v``: lines on stderr naming ``label``."""
+def progress_for(args, label: str, plan: RunPlan | None = None) -> StderrProgress | None:
+    """The progress callback of ``-q`` / default / ``-v``: lines on stderr naming ``label``.
+
+    With ``plan`` (``match``: :data:`~meshcorr.runtime.progress.MATCH_PLAN`), one line for the whole run;
+    without, a line per stage. Close it when the work ends (:func:`reporting`).
+    """
     if args.quiet:
         return None
-    return StderrProgress(sys.stderr, label=label, delay=0.0 if args.verbose else 1.0)
+    return StderrProgress(sys.stderr, label=label, delay=0.0 if args.verbose else 1.0, plan=plan,
+                          verbose=args.verbose)
+
+
+@contextmanager
+def reporting(args, label: str, plan: RunPlan | None = None):
+    """:func:`progress_for` for a block; closed as the block ends, by an error or Ctrl-C too (its thread stops)."""
+    progress = progress_for(args, label, plan)
+    try:
+        yield progress
+    finally:
+        close = getattr(progress, "close", None)
+        if close is not None:
+            close()
 
 
 def run(args) -> int:
@@ -276,9 +293,9 @@ def _match(args, landmarks):
     """``meshcorr.match`` with the options of ``meshcorr match`` (:func:`settings_of`)."""
     from .. import match
 
-    return match(args.source, args.target, settings_of(args, landmarks),
-                 progress=progress_for(args, f"{os.path.basename(args.source)} -> "
-                                             f"{os.path.basename(args.target)}"))
+    label = f"{os.path.basename(args.source)} -> {os.path.basename(args.target)}"
+    with reporting(args, label, MATCH_PLAN) as progress:
+        return match(args.source, args.target, settings_of(args, landmarks), progress=progress)
 
 
 def settings_of(args, landmarks) -> Settings:

@@ -127,7 +127,7 @@ def run(args) -> int:
     from ..viz.plots import require_matplotlib
     from ..viz.figures import correspondence_figure
     from ..io import check_outputs
-    from .match import progress_for
+    from .match import reporting
 
     check_png(args.output)
     check_outputs({"-o": args.output}, {"SOURCE": args.source, "TARGET": args.target, "MAP": args.map,
@@ -149,11 +149,11 @@ def run(args) -> int:
     mapping = read_checked_map(args.map, len(source[0]), len(target[0]))
     truth = dense_truth(args.gt, len(source[0]), len(target[0])) if args.gt else None
     # The geodesic errors against --gt take minutes on large meshes: say how far they are (as evaluate).
-    progress = progress_for(args, f"{args.map} on {args.target}")
-    info = correspondence_figure(source, target, mapping, args.output, truth=truth,
-                                 error=args.error, coloring=args.coloring, geodesic=args.geodesic or GEODESIC,
-                                 elev=args.elev, azim=args.azim, up=args.up, dpi=args.dpi,
-                                 map_name=args.map, progress=progress)
+    with reporting(args, f"{args.map} on {args.target}") as progress:
+        info = correspondence_figure(source, target, mapping, args.output, truth=truth,
+                                     error=args.error, coloring=args.coloring, geodesic=args.geodesic or GEODESIC,
+                                     elev=args.elev, azim=args.azim, up=args.up, dpi=args.dpi,
+                                     map_name=args.map, progress=progress)
     line = f"wrote {args.output}"
     if info:
         line += f" (geodesic error / sqrt(area): mean {info['mean_error']:.4f})"

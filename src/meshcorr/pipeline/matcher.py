@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from ..errors import MeshcorrError, ParameterError
 from ..core.mesh import MeshLike
-from ..runtime.progress import as_progress
+from ..runtime.progress import MATCH_PLAN, as_progress
 from ..maps.result import Correspondence
 from .settings import Settings
 
@@ -96,7 +96,7 @@ class Matcher:
         from .run import match
 
         settings = self._settings()
-        reporter = as_progress(progress)
+        reporter = as_progress(progress, MATCH_PLAN)  # one bar for the run
         try:
             result = match(source, target, settings, progress=reporter)
         finally:

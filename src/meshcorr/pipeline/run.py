@@ -39,7 +39,7 @@ from ..core.holes import restrict, unfilled
 from ..core.mesh import Mesh, MeshLike
 from ..errors import MeshWarning, ParameterError, PartialShapeWarning, UnsureChoiceWarning
 from ..maps.result import Correspondence
-from ..runtime.progress import as_progress
+from ..runtime.progress import as_progress, reports_progress
 from ..runtime.timing import StageProgress, StageTimer
 from ..shapes.prepared import PreparedShape, as_meshes, pair_shapes, pair_spectrum
 from ..spectral.modes import resolve_memory, select_mode
@@ -60,6 +60,7 @@ __all__ = ["match", "REFINE_K", "EXTREMITY_STARTS"]
 
 
 
+@reports_progress
 def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, settings: Settings | None = None, *,
           progress: StageProgress | bool | None = None, **overrides) -> Correspondence:
     """Dense vertex correspondence from ``source`` to ``target``.

@@ -53,6 +53,7 @@ from __future__ import annotations
 
 import os
 import time
+import uuid
 import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -206,6 +207,9 @@ class _Run:
         records = {(r["source"], r["target"]): r for r in read_summary(out)}
         self = cls(out, pairs, settings, options, ground_truth, hub, records)
         self.todo = [(a, b) for a, b in pairs if not self.done_before(a, b)]
+        # One token per run in every Dask key: a key cancelled by an interrupted run on the same cluster
+        # would otherwise cancel the same task of the next run too (FutureCancelledError).
+        self.token = uuid.uuid4().hex[:8]
         return self
 
     def inputs(self, a: str, b: str) -> str:
@@ -214,7 +218,7 @@ class _Run:
 
     def shape_key(self, kind: str, path: str) -> str:
         """The Dask key of the task ``kind`` ("prepare", "dna") of one shape: its file and the settings."""
-        return f"{kind}-{task_key(path, self.settings, self.options, digests=self.digests)}"
+        return f"{kind}-{task_key(path, self.settings, self.options, digests=self.digests)}-{self.token}"
 
     def done_before(self, a: str, b: str) -> bool:
         record = self.records.get((a, b), {})
@@ -229,7 +233,7 @@ class _Run:
     def key(self, kind: str, a: str, b: str, *extra) -> str:
         """The Dask key of the task ``kind`` ("match", "invert", "compose") of a pair."""
         made_of = (self.settings, self.options, self.ground_truth, self.map_path(a, b), *extra)
-        return f"{kind}-{task_key(a + chr(0) + b, *made_of, digests=self.digests)}"
+        return f"{kind}-{task_key(a + chr(0) + b, *made_of, digests=self.digests)}-{self.token}"
 
     def made(self, pair: tuple[str, str], futures: dict):
         """The future of a map made in this run, else its record from an earlier run (or None)."""

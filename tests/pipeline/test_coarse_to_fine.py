@@ -75,6 +75,7 @@ def test_an_unsure_choice_warns_naming_the_landmarks_to_give(pair, monkeypatch):
     with pytest.warns(UnsureChoiceWarning, match="landmarks") as caught:
         result = meshcorr.match(src, tgt, coarse_vertices=400)
     assert result.confidence["low"]
+    assert caught[0].filename == __file__  # the warning points at the caller's line
     first = result.confidence["suggested_landmarks"][0]
     assert f"source vertices {first['source']}" in str(caught[0].message)
     with warnings.catch_warnings():

@@ -39,7 +39,7 @@ from ..core.holes import restrict, unfilled
 from ..core.mesh import Mesh, MeshLike
 from ..errors import MeshWarning, ParameterError, PartialShapeWarning, UnsureChoiceWarning
 from ..maps.result import Correspondence
-from ..runtime.progress import as_progress, reports_progress
+from ..runtime.progress import run_progress
 from ..runtime.timing import StageProgress, StageTimer
 from ..shapes.prepared import PreparedShape, as_meshes, pair_shapes, pair_spectrum
 from ..spectral.modes import resolve_memory, select_mode
@@ -59,8 +59,6 @@ from .settings import REFINE_K, Settings, as_settings, shape_settings
 __all__ = ["match", "REFINE_K", "EXTREMITY_STARTS"]
 
 
-
-@reports_progress
 def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, settings: Settings | None = None, *,
           progress: StageProgress | bool | None = None, **overrides) -> Correspondence:
     """Dense vertex correspondence from ``source`` to ``target``.
@@ -100,15 +98,15 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, se
         :class:`meshcorr.Settings` refuses, or one that does not fit the meshes.
     """
     settings = as_settings(settings, overrides)
-    progress = as_progress(progress)
-    if settings.method != "spectral":
-        return _match_baseline(source, target, settings, progress)
-    timer = StageTimer(progress)
-    max_memory = resolve_memory(settings.max_memory)
-    shapes, pairs = _load(source, target, settings, timer)
-    if settings.partial is not None:  # a part against the whole: meshcorr.pipeline.partial
-        return _match_partial(shapes, pairs, settings, max_memory, timer)
-    result = _match_whole(shapes, pairs, settings, max_memory, timer)
+    with run_progress(progress) as progress:  # one bar for the run (meshcorr.runtime.progress)
+        if settings.method != "spectral":
+            return _match_baseline(source, target, settings, progress)
+        timer = StageTimer(progress)
+        max_memory = resolve_memory(settings.max_memory)
+        shapes, pairs = _load(source, target, settings, timer)
+        if settings.partial is not None:  # a part against the whole: meshcorr.pipeline.partial
+            return _match_partial(shapes, pairs, settings, max_memory, timer)
+        result = _match_whole(shapes, pairs, settings, max_memory, timer)
     if result.confidence is not None and result.confidence["low"]:  # meshcorr.choice.confidence
         warnings.warn(unsure_message(result.confidence), UnsureChoiceWarning, stacklevel=2)
     return result

@@ -9,7 +9,7 @@
 - :class:`StderrProgress`: the command line's progress line on a stream
   (rewritten in place on a terminal), which ticks while a stage reports
   nothing.
-- :func:`reports_progress`: the decorator of :func:`meshcorr.match` that
+- :func:`run_progress`: the ``with`` block of :func:`meshcorr.match` that
   turns its ``progress`` option into a callback and tells a ready-made
   reporter when the run has ended.
 
@@ -22,7 +22,8 @@ with its own reports.
 
 from __future__ import annotations
 
-import functools
+import contextlib
+
 import sys
 import threading
 import time
@@ -32,7 +33,7 @@ from typing import NamedTuple
 from ..errors import ParameterError
 
 __all__ = ["MATCH_PLAN", "RunPlan", "RunProgress", "StderrProgress", "TqdmProgress", "as_progress",
-           "format_duration", "reports_progress"]
+           "format_duration", "run_progress"]
 
 
 class RunPlan(NamedTuple):
@@ -298,32 +299,29 @@ def as_progress(progress, plan: RunPlan | None = None):
     return progress
 
 
-def reports_progress(function):
-    """Decorator of a run's entry point with a ``progress`` keyword (:func:`meshcorr.match`).
+@contextlib.contextmanager
+def run_progress(progress):
+    """The reporter of one run with a ``progress`` option (:func:`meshcorr.match`), as a ``with`` block.
 
     ``progress`` becomes a callback (:func:`as_progress` with
     :data:`MATCH_PLAN`). A ready-made reporter (:class:`TqdmProgress`,
-    :class:`StderrProgress`) is finished when the run returns and closed when
+    :class:`StderrProgress`) is finished when the block ends and closed when
     it raises; one made here from ``progress=True`` is closed in both cases.
-    A user's own callback is only called by the stages.
+    A user's own callback is only called by the stages. A block, not a
+    decorator: the run's warnings keep pointing at its caller's line.
     """
-    @functools.wraps(function)
-    def run(*args, progress=None, **kwargs):
-        reporter = as_progress(progress, MATCH_PLAN)
-        ready_made = isinstance(reporter, (TqdmProgress, StderrProgress))
-        try:
-            result = function(*args, progress=reporter, **kwargs)
-            if ready_made:
-                reporter.finish()
-        except BaseException:
-            if ready_made:
-                reporter.close()
-            raise
-        if ready_made and reporter is not progress:
+    reporter = as_progress(progress, MATCH_PLAN)
+    ready_made = isinstance(reporter, (TqdmProgress, StderrProgress))
+    try:
+        yield reporter
+        if ready_made:
+            reporter.finish()
+    except BaseException:
+        if ready_made:
             reporter.close()
-        return result
-
-    return run
+        raise
+    if ready_made and reporter is not progress:
+        reporter.close()
 
 
 class StderrProgress:

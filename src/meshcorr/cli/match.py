@@ -133,6 +133,10 @@ def add_parser(sub) -> None:
                    help="also start the whole-map choice from every sign configuration of the first "
                         "Laplace-Beltrami functions, the best by their smooth-shell alignment (a wider search "
                         f"for the global configuration; default: {'on' if DEFAULTS.sign_search else 'off'})")
+    g.add_argument("--check-reverse", action="store_true", default=DEFAULTS.check_reverse,
+                   help="also match TARGET to SOURCE and report how far a round trip moves source vertices "
+                        "(--json: confidence.cycle_error); a large one means one of the two maps is turned or "
+                        "mirrored, and is warned about. Doubles the time (default: off)")
     g.add_argument("--partial", choices=("source", "target"), default=DEFAULTS.partial,
                    help="SOURCE is a part of TARGET (one side of a scan, a cut, large holes), or the reverse: "
                         "the map covers the part only (with 'target', SOURCE vertices outside the matched "

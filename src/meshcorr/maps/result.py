@@ -140,8 +140,10 @@ class Correspondence:
         ``low``, whether it is below the unsure threshold; ``rival``, that
         map's origin; ``suggested_landmarks``, a few ``{"source", "chosen",
         "rival"}`` vertices (input numbering) where the two maps disagree
-        most: a landmark on each settles the choice. None when no whole-map
-        choice was made.
+        most: a landmark on each settles the choice; with ``check_reverse``,
+        ``cycle_error``, how far a round trip through the map and the map
+        back moves source vertices (geodesic distance over sqrt(area)).
+        None when no whole-map choice was made.
     partial : {None, "source", "target"}
         Which shape was declared a part of the other (:mod:`meshcorr.pipeline.partial`);
         None for a whole-to-whole map.

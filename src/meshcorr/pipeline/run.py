@@ -32,6 +32,7 @@ import numpy as np
 
 from ..core.orientation import mesh_orientation
 from ..choice.confidence import unsure_message
+from ..choice.reverse_check import CYCLE_LIMIT, cycle_error
 from ..choice.symmetry import ConfigurationCandidate, choose, score_configurations
 from ..choice.whole_map import EXTREMITY_STARTS, WholeMapChoice, whole_map_choice
 from ..core.coarse import CoarseCopy, coarse_copy, needs_copy
@@ -107,9 +108,26 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, se
         if settings.partial is not None:  # a part against the whole: meshcorr.pipeline.partial
             return _match_partial(shapes, pairs, settings, max_memory, timer)
         result = _match_whole(shapes, pairs, settings, max_memory, timer)
+        if settings.check_reverse:  # the pair matched the other way round (meshcorr.choice.reverse_check)
+            with timer.stage("reverse"):
+                result.confidence = _reverse_checked(result, source, target, settings)
+            result.timings = timer.timings
     if result.confidence is not None and result.confidence["low"]:  # meshcorr.choice.confidence
         warnings.warn(unsure_message(result.confidence), UnsureChoiceWarning, stacklevel=2)
     return result
+
+
+def _reverse_checked(result: Correspondence, source, target, settings: Settings) -> dict:
+    """``result.confidence`` with the cycle error of the map and the map back, and ``low`` when it is large."""
+    landmarks = None if settings.landmarks is None else np.asarray(settings.landmarks)[:, ::-1].tolist()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeshWarning)  # the reverse run's warnings are said by its own run
+        reverse = match(target, source, settings.replace(check_reverse=False, landmarks=landmarks))
+    error = cycle_error(result.source, result.map, reverse.map, geodesic=settings.geodesic,
+                        random_state=settings.random_state)
+    report = dict(result.confidence or {"margin": None, "low": False, "rival": None, "suggested_landmarks": []})
+    report.update(cycle_error=round(error, 4), low=bool(report["low"] or error > CYCLE_LIMIT))
+    return report
 
 
 def _match_baseline(source, target, settings: Settings, progress) -> Correspondence:

@@ -58,7 +58,7 @@ MIN_COARSE_VERTICES = 300
 #: 200 is five times the default (a basis larger than a mesh's vertices - 1 is clipped to that).
 MAX_REFINE_K = 200
 #: Settings whose value must be True or False (numpy's too), in the order they are checked.
-_SWITCHES = ("bijective", "shells", "extremities", "oriented_starts", "sign_search", "prealign")
+_SWITCHES = ("bijective", "shells", "extremities", "oriented_starts", "sign_search", "check_reverse", "prealign")
 #: The spectral pipeline's switches that only it checks (with :data:`_SWITCHES`).
 _SPECTRAL_SWITCHES = ("scale_eigenvalues", "refine", "largest_component", "fill_holes")
 
@@ -184,6 +184,13 @@ class Settings:
         copies. Used with ``symmetry="auto"``. Off by default: measured better
         on four-legged animals and worse on people, whose added maps turned
         front to back the energies cannot reject (docs/method.md).
+    check_reverse : bool
+        Also match the pair the other way round and report how far a round
+        trip (source -> target -> source) moves source vertices
+        (``result.confidence["cycle_error"]``, :mod:`meshcorr.choice.reverse_check`):
+        two choices made apart that disagree mean one of them turned or
+        mirrored the shape. Above the limit the choice is reported as unsure.
+        Doubles the time of a match.
     partial : {None, "source", "target"}
         None: both shapes are whole (they may have small holes).
         ``"source"``: the source is a part of the target (one side of a scan,
@@ -240,6 +247,7 @@ class Settings:
     extremities: bool = True
     oriented_starts: bool = False
     sign_search: bool = False
+    check_reverse: bool = False
     partial: str | None = None
     fill_holes: bool = True
     coarse_vertices: int = COARSE_VERTICES

@@ -1,9 +1,10 @@
 """``meshcorr batch``'s own option checks (the batch itself: tests/collection/test_batch.py)."""
+import pytest
 
 import os
 
 from meshcorr.cli import main
-from meshcorr.cli.batch import MAX_WORKERS, max_workers
+from meshcorr.collection.cluster import MAX_WORKERS, max_workers
 
 
 def test_workers_are_bounded_before_any_work(tmp_path, capsys):
@@ -14,3 +15,13 @@ def test_workers_are_bounded_before_any_work(tmp_path, capsys):
     assert main(["batch", "--all-pairs", a, b, "--out", str(out), "--workers", "100000"]) == 2
     err = capsys.readouterr().err
     assert f"give at most {max_workers()}" in err and "--scheduler" in err and not out.exists()
+
+
+def test_the_library_batch_bounds_its_local_workers_too(tmp_path):
+    from meshcorr.collection.batch import batch
+    from meshcorr.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=f"give at most {max_workers()}"):
+        batch([("examples/creature_rest.off", "examples/creature_bent.off")], tmp_path / "out",
+              n_workers=max_workers() + 1)
+    assert not (tmp_path / "out" / "maps").exists()

@@ -55,17 +55,6 @@ species (measured in benchmarks/RESULTS-collections.md).
 """
 
 
-#: The most local worker processes ``--workers`` may start: this many per core, and never more than
-#: :data:`MAX_WORKERS` (each process holds its meshes and matrices; more only queue for the cores).
-WORKERS_PER_CORE = 4
-MAX_WORKERS = 256
-
-
-def max_workers() -> int:
-    """The most ``--workers`` on this machine: :data:`WORKERS_PER_CORE` per core, at most :data:`MAX_WORKERS`."""
-    return min(WORKERS_PER_CORE * (os.cpu_count() or 1), MAX_WORKERS)
-
-
 def add_parser(sub) -> None:
     p = sub.add_parser("batch", help=HELP, description=DESCRIPTION,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -126,6 +115,7 @@ def _on(switch: bool) -> str:
 
 
 def _pairs(args) -> list[tuple[str, str]]:
+    from ..collection.cluster import MAX_WORKERS, WORKERS_PER_CORE, max_workers
     from ..collection.pairs import all_pairs, read_pair_list, template_pairs
     from ..errors import ParameterError
 

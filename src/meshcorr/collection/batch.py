@@ -65,7 +65,7 @@ from ..errors import OutputError, ParameterError
 from ..evaluation.run_settings import check_run_settings
 from ..pipeline.settings import Settings
 from ..runtime.messages import one_line
-from .cluster import import_distributed, local_client
+from .cluster import MAX_WORKERS, WORKERS_PER_CORE, import_distributed, local_client, max_workers
 from .folder import output_lock
 from .options import jsonable, split_options, task_key
 from .pairs import all_pairs, map_name
@@ -275,6 +275,12 @@ def _check_cluster(client, n_workers, pairs: list[tuple[str, str]], out_dir) -> 
     if n_workers is not None and (isinstance(n_workers, bool) or not isinstance(n_workers, int) or n_workers < 1):
         raise ParameterError(f"The number of worker processes must be a whole number >= 1 (--workers N); got "
                              f"{n_workers!r}.")
+    if n_workers is not None and client is None and n_workers > max_workers():  # it started processes until
+        # the machine gave out
+        raise ParameterError(f"n_workers={n_workers} (--workers) would start {n_workers} processes on this "
+                             f"machine's {os.cpu_count() or 1} core(s): give at most {max_workers()} "
+                             f"({WORKERS_PER_CORE} per core, at most {MAX_WORKERS}), or run a larger cluster and "
+                             "pass its client (--scheduler).")
     if client is not None:  # its workers may run in other folders, or on other machines
         relative = [p for pair in pairs for p in pair if not os.path.isabs(p)] + \
             ([] if os.path.isabs(str(out_dir)) else [str(out_dir)])

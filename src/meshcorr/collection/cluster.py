@@ -18,7 +18,18 @@ from contextlib import contextmanager
 from ..errors import ParameterError
 from ..runtime.messages import one_line
 
-__all__ = ["CONNECT_TIMEOUT", "DASK_MISSING", "connect", "import_distributed", "local_client"]
+__all__ = ["CONNECT_TIMEOUT", "DASK_MISSING", "MAX_WORKERS", "WORKERS_PER_CORE", "connect", "import_distributed",
+           "local_client", "max_workers"]
+
+#: The most local worker processes a batch may start: this many per core, and never more than
+#: :data:`MAX_WORKERS` (each process holds its meshes and matrices; more only queue for the cores).
+WORKERS_PER_CORE = 4
+MAX_WORKERS = 256
+
+
+def max_workers() -> int:
+    """The most local workers on this machine: :data:`WORKERS_PER_CORE` per core, at most :data:`MAX_WORKERS`."""
+    return min(WORKERS_PER_CORE * (os.cpu_count() or 1), MAX_WORKERS)
 
 #: Seconds :func:`connect` waits for a scheduler to answer.
 CONNECT_TIMEOUT = 30

@@ -1,7 +1,8 @@
 """``meshcorr batch``'s own option checks (the batch itself: tests/collection/test_batch.py)."""
-import pytest
 
 import os
+
+import pytest
 
 from meshcorr.cli import main
 from meshcorr.collection.cluster import MAX_WORKERS, max_workers

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from meshcorr.core.boundary import boundary_distance, boundary_edges, mesh_boundary
+from meshcorr.core.boundary import boundary_distance, boundary_edges, enclosed_areas, mesh_boundary
 from meshcorr.core.mesh import Mesh
 
 from .meshes import grid, sphere
@@ -38,6 +38,13 @@ def test_square_with_a_hole_two_loops_longest_first():
     on_side = np.isin(vertices[outer][:, :, :2], [0.0, 1.0]).any(axis=2).all(axis=1)
     assert on_side.all() and len(outer) == 24
 
+
+
+def test_enclosed_areas_of_a_square_with_a_hole():
+    vertices, faces = grid(n=6, size=1.0, holes={(2, 2), (2, 3), (3, 2), (3, 3)})
+    area = 1.0 - 4 / 36
+    np.testing.assert_allclose(enclosed_areas(Mesh(vertices, faces)), [1.0 / area, (2 / 6) ** 2 / area], rtol=1e-12)
+    assert len(enclosed_areas(Mesh(*sphere(1)))) == 0
 
 def test_distance_to_the_boundary_of_a_square():
     vertices, faces = grid(n=10, size=1.0)

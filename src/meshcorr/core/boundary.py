@@ -119,6 +119,27 @@ def mesh_boundary(mesh: Mesh) -> Boundary:
     return mesh.store[key]
 
 
+def enclosed_areas(mesh: Mesh) -> np.ndarray:
+    """``(n_loops,)`` float: the area each boundary loop encloses, divided by the mesh's area, cached.
+
+    The norm of the loop's vector area, :math:`\\tfrac12 \\lVert \\sum_{(a, b)} a \\times b \\rVert`
+    over its edges: the area of a flat cap, of the loop's projection on its best plane otherwise. Unlike the
+    loop's length, it does not grow when the loop zigzags along the edges of a coarse mesh (a hole of
+    0.5 % of the area left a loop 2.5 x sqrt(area) long on a 5000-vertex TOSCA horse; its vector area
+    is under 1 % of the area). In the order of :attr:`Boundary.lengths`; empty for a closed mesh.
+    """
+    key = ("enclosed_areas",)
+    if key not in mesh.store:
+        boundary = mesh_boundary(mesh)
+        cross = np.cross(mesh.vertices[boundary.edges[:, 0]], mesh.vertices[boundary.edges[:, 1]])
+        sums = np.zeros((boundary.n_loops, 3))
+        np.add.at(sums, boundary.loop, cross)
+        areas = 0.5 * np.linalg.norm(sums, axis=1) / max(mesh.area, 1e-300)
+        areas.flags.writeable = False
+        mesh.store.put(key, areas)
+    return mesh.store[key]
+
+
 def boundary_distance(mesh: Mesh) -> np.ndarray:
     """``(n,)`` float: heat-method geodesic distance from each vertex to the boundary, cached.
 

@@ -42,8 +42,14 @@ import dataclasses
 
 import numpy as np
 
-from .boundary import mesh_boundary
+from .boundary import enclosed_areas, mesh_boundary
 from .mesh import Mesh
+
+#: A closed loop that encloses at least this share of the mesh's area (:func:`meshcorr.core.boundary.enclosed_areas`)
+#: looks like a cut rather than a hole (:func:`large_closed_loops`). Measured on TOSCA 5k
+#: (``benchmarks/RESULTS-partial.md``): holes of 0.5-2 % of the area enclose at most 0.021, plane cuts
+#: to 70 % of the area at least 0.03 in 90 % of the cases.
+LARGE_HOLE = 0.03
 
 
 def fills(fill_holes: bool, *, partial: str | None, bijective: bool) -> bool:
@@ -75,17 +81,7 @@ def fill_holes(mesh: Mesh) -> Mesh:
     if boundary.n_loops == 0:
         return mesh
     edges, loop = boundary.edges, boundary.loop
-    # A loop is simple when each of its vertices starts exactly one of its edges (and so ends one).
-    starts = np.bincount(edges[:, 0], minlength=mesh.n_vertices)
-    simple = np.ones(boundary.n_loops, dtype=bool)
-    simple[np.unique(loop[starts[edges[:, 0]] != 1])] = False
-    simple &= np.bincount(loop, minlength=boundary.n_loops) >= 3
-    sums = np.zeros((boundary.n_loops, 3))
-    np.add.at(sums, loop, mesh.vertices[edges[:, 0]])
-    centres = sums / np.bincount(loop, minlength=boundary.n_loops)[:, None]
-    # A fan triangle without area (the centre on the line of a rim edge, e.g. a rim vertex itself)
-    # would break the cotangent weights: such a loop stays open.
-    simple[np.unique(loop[_flat(mesh.vertices[edges[:, 0]], mesh.vertices[edges[:, 1]], centres[loop])])] = False
+    simple, centres = _closable(mesh)
     filled = np.flatnonzero(simple)
     if len(filled) == 0:
         return mesh
@@ -99,6 +95,24 @@ def fill_holes(mesh: Mesh) -> Mesh:
     return Mesh(np.vstack([mesh.vertices, centres]), np.vstack([mesh.faces, fans]), name=mesh.name,
                 kept=np.concatenate([mesh.kept, mesh.n_original + np.arange(n_new)]),
                 n_original=mesh.n_original + n_new, n_caps=mesh.n_caps + n_new)
+
+
+def _closable(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """``(n_loops,)`` bool: the loops :func:`fill_holes` closes, and ``(n_loops, 3)``: their centroids."""
+    boundary = mesh_boundary(mesh)
+    edges, loop = boundary.edges, boundary.loop
+    # A loop is simple when each of its vertices starts exactly one of its edges (and so ends one).
+    starts = np.bincount(edges[:, 0], minlength=mesh.n_vertices)
+    simple = np.ones(boundary.n_loops, dtype=bool)
+    simple[np.unique(loop[starts[edges[:, 0]] != 1])] = False
+    simple &= np.bincount(loop, minlength=boundary.n_loops) >= 3
+    sums = np.zeros((boundary.n_loops, 3))
+    np.add.at(sums, loop, mesh.vertices[edges[:, 0]])
+    centres = sums / np.bincount(loop, minlength=boundary.n_loops)[:, None]
+    # A fan triangle without area (the centre on the line of a rim edge, e.g. a rim vertex itself)
+    # would break the cotangent weights: such a loop stays open.
+    simple[np.unique(loop[_flat(mesh.vertices[edges[:, 0]], mesh.vertices[edges[:, 1]], centres[loop])])] = False
+    return simple, centres
 
 
 def _flat(a: np.ndarray, b: np.ndarray, c: np.ndarray, *, tolerance: float = 1e-6) -> np.ndarray:
@@ -125,6 +139,39 @@ def unfilled(mesh: Mesh) -> Mesh:
     n = mesh.n_vertices - mesh.n_caps
     faces = mesh.faces[(mesh.faces < n).all(axis=1)]
     return Mesh(mesh.vertices[:n], faces, name=mesh.name, kept=mesh.kept[:n], n_original=mesh.n_input)
+
+
+def large_closed_loops(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """The loops :func:`fill_holes` closed on ``mesh`` that look like a cut rather than a hole.
+
+    A hole of a whole shape (a missing patch of a scan, a few missing
+    triangles) encloses a small share of the area; a plane cut, which
+    :func:`fill_holes` closes as well, encloses a cross-section of the body.
+    The loops whose enclosed area (:func:`meshcorr.core.boundary.enclosed_areas`)
+    is at least :data:`LARGE_HOLE` of the area are reported (the loop's length
+    is no such measure: on a coarse mesh a loop zigzags along the edges, and
+    a hole of 0.5 % of the area can leave one as long as a cut's).
+
+    Parameters
+    ----------
+    mesh : Mesh
+        A mesh from :func:`fill_holes` (or any mesh: without caps, nothing was closed).
+
+    Returns
+    -------
+    lengths : (c,) float
+        Each such loop's length divided by sqrt(the area of the mesh as given), largest enclosure first.
+    enclosed : (c,) float
+        The share of that area each encloses.
+    """
+    if mesh.n_caps == 0:
+        return np.zeros(0), np.zeros(0)
+    given = unfilled(mesh)
+    boundary = mesh_boundary(given)
+    enclosed = enclosed_areas(given)
+    large = np.flatnonzero(_closable(given)[0] & (enclosed >= LARGE_HOLE))
+    large = large[np.argsort(-enclosed[large], kind="stable")]
+    return boundary.lengths[large] / np.sqrt(given.area), enclosed[large]
 
 
 def cap_targets(mesh: Mesh) -> np.ndarray:

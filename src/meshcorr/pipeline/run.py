@@ -36,7 +36,7 @@ from ..choice.reverse_check import CYCLE_LIMIT, cycle_error
 from ..choice.symmetry import ConfigurationCandidate, choose, score_configurations
 from ..choice.whole_map import EXTREMITY_STARTS, WholeMapChoice, whole_map_choice
 from ..core.coarse import CoarseCopy, coarse_copy, needs_copy
-from ..core.holes import restrict, unfilled
+from ..core.holes import restrict
 from ..core.mesh import Mesh, MeshLike
 from ..errors import MeshWarning, ParameterError, PartialShapeWarning, UnsureChoiceWarning
 from ..maps.result import Correspondence
@@ -321,7 +321,7 @@ def _spectra(shapes, settings: Settings, mode: str, timer: StageTimer) -> list:
     per_shape = shape_settings(settings)
     spectra = [pair_spectrum(shape, per_shape, mode, timer) for shape in shapes]
     src, tgt = as_meshes(*shapes)
-    suspicion = partiality_suspicion(unfilled(src), unfilled(tgt), spectra[0].max_geodesic, spectra[1].max_geodesic)
+    suspicion = partiality_suspicion(src, tgt, spectra[0].max_geodesic, spectra[1].max_geodesic)  # holes open or closed
     if suspicion:  # a part given as a whole shape (meshcorr.pipeline.partial)
         warnings.warn(suspicion, PartialShapeWarning, stacklevel=4)
     return spectra

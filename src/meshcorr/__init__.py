@@ -16,7 +16,8 @@ from importlib import import_module
 from ._moved import PUBLIC_MODULES, install as _install_old_paths, moved_attribute as _moved_attribute
 from ._version import __version__
 from .errors import (InputError, LandmarkError, MeshError, MeshWarning, MeshcorrError, ParameterError,
-                     PartialityError, PartialShapeWarning, PreparedShapeError, UnsureChoiceWarning)
+                     PartialityError, PartialShapeWarning, PreparedShapeError, UnsureChoiceWarning,
+                     LandmarkWarning)
 
 #: Public name -> (module, attribute); attribute None for a public submodule.
 _LAZY = {
@@ -34,7 +35,8 @@ _LAZY = {
 
 __all__ = ["match", "Matcher", "Settings", "prepare", "PreparedShape", "batch", "Correspondence", "Mesh",
            "as_mesh", "MeshError", "MeshWarning", "MeshcorrError", "ParameterError", "InputError", "LandmarkError",
-           "PartialityError", "PartialShapeWarning", "PreparedShapeError", "UnsureChoiceWarning", "datasets", "evaluation",
+           "PartialityError", "PartialShapeWarning", "PreparedShapeError", "UnsureChoiceWarning", "LandmarkWarning",
+           "datasets", "evaluation",
            "fmap", "precise", "progress", "transfer", "viz", "__version__"]
 
 

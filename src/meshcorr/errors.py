@@ -78,3 +78,8 @@ class UnsureChoiceWarning(MeshWarning):
 
 class PartialShapeWarning(MeshWarning):
     """One shape looks like a part of the other, but ``partial`` was not given (see :mod:`meshcorr.pipeline.partial`)."""
+
+
+class LandmarkWarning(MeshWarning):
+    """User landmarks look wrong: they disagree with each other or with every map found without them
+    (:mod:`meshcorr.choice.landmark_doubts`); the pairs are named."""

@@ -1,5 +1,7 @@
 """Whole-map choice (meshcorr.choice.selection), extremities and user landmarks (issue 12)."""
 
+import warnings
+
 import numpy as np
 import pytest
 from scipy.spatial import cKDTree
@@ -79,7 +81,8 @@ def test_landmarks_settle_the_left_right_choice(person):
     # Landmarks that say "mirror": the map must follow them, exactly at the landmarks.
     picks = [tip_vertex(mesh, n) for n in ("head", "arm_l", "leg_r", "nose")]
     pairs = [(int(i), int(mirrored[i])) for i in picks]
-    result = meshcorr.match((mesh.vertices, mesh.faces), (target.vertices, target.faces), landmarks=pairs)
+    with pytest.warns(meshcorr.LandmarkWarning, match="mirror image"):  # followed, but named (issue 31, item 9)
+        result = meshcorr.match((mesh.vertices, mesh.faces), (target.vertices, target.faces), landmarks=pairs)
     assert all(result.map[i] == j for i, j in pairs)
     assert np.mean(result.map == mirrored) > 0.9
     chosen = [c for c in result.map_candidates if c["chosen"]][0]
@@ -287,3 +290,40 @@ def test_on_coarse_copies_the_curvature_is_measured_on_the_full_meshes():
     assert lifted.curvature == pytest.approx(expected)
     assert on_copies.curvature == pytest.approx(0.0, abs=1e-12) and lifted.curvature > 0.01
     assert lifted.orientation == pytest.approx(on_copies.orientation)  # the orientation stays the copies'
+
+
+# Landmarks that look wrong are named (issue 31, item 9: 4 random pairs gave a flipped map, 2 wrong
+# pairs of 7 doubled the error, without a word).
+LANDMARK_SOURCES = np.array([10, 100, 200, 300, 400, 480])
+
+
+def _landmark_warnings(source, target, pairs) -> list[str]:
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        meshcorr.match(source, target, landmarks=pairs.tolist())
+    return [str(w.message) for w in caught if issubclass(w.category, meshcorr.LandmarkWarning)]
+
+
+def test_right_landmarks_do_not_warn(creature_rest_and_bent_moved):
+    rest, bent, truth, _ = creature_rest_and_bent_moved
+    pairs = np.stack([LANDMARK_SOURCES, truth[LANDMARK_SOURCES]], axis=1)
+    assert _landmark_warnings(rest, bent, pairs) == []
+
+
+def test_one_wrong_pair_of_six_is_named(creature_rest_and_bent_moved):
+    rest, bent, truth, _ = creature_rest_and_bent_moved
+    pairs = np.stack([LANDMARK_SOURCES, truth[LANDMARK_SOURCES]], axis=1)
+    pairs[2, 1] = truth[LANDMARK_SOURCES[5]]  # vertex 200 sent where vertex 480 goes
+    found = _landmark_warnings(rest, bent, pairs)
+    assert len(found) == 1 and "1 of the 6 landmark pairs" in found[0]
+    assert f"200 -> {pairs[2, 1]} (" in found[0]
+    assert all(f"{a} -> {b} (" not in found[0] for a, b in pairs[[0, 1, 3, 4, 5]])
+
+
+def test_random_landmarks_warn(creature_rest_and_bent_moved):
+    rest, bent, _, _ = creature_rest_and_bent_moved
+    rng = np.random.default_rng(0)
+    pairs = np.stack([rng.choice(rest.n_vertices, 4, replace=False), rng.choice(bent.n_vertices, 4, replace=False)],
+                     axis=1)
+    found = _landmark_warnings(rest, bent, pairs)
+    assert len(found) == 1 and "landmark pairs look wrong" in found[0]

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from meshcorr.errors import ParameterError
-from meshcorr.stages.landmarks import landmark_descriptors, landmark_map, landmark_table
+from meshcorr.stages.landmarks import landmark_descriptors, landmark_disagreement, landmark_map, landmark_table
 
 N = 21
 
@@ -48,3 +48,21 @@ def test_booleans_are_no_landmark_indices():
             landmark_table(landmarks)
     assert landmark_table([(1, 3)]).tolist() == [[1, 3]]
     assert landmark_table(np.array([[1, 3]])).tolist() == [[1, 3]]
+
+
+def test_the_disagreement_names_the_pair_whose_distances_do_not_fit():
+    # On a path and a copy twice as long, every right pair keeps its distances (after scaling);
+    # a pair sent elsewhere disagrees with all the others (issue 31, item 9).
+    def scaled(i):
+        return 2.0 * path_row(i)
+
+    pairs = np.array([[0, 0], [4, 4], [8, 8], [12, 12], [16, 16], [20, 20]])
+    np.testing.assert_allclose(landmark_disagreement(path_row, scaled, pairs), 0.0, atol=1e-12)
+    pairs[2, 1] = 19
+    disagreement = landmark_disagreement(path_row, scaled, pairs)
+    assert int(np.argmax(disagreement)) == 2
+    assert disagreement[2] > 3 * np.median(disagreement) and disagreement[2] > 0.3
+
+
+def test_two_pairs_always_agree():
+    assert landmark_disagreement(path_row, path_row, np.array([[0, 20], [5, 6]])).tolist() == [0.0, 0.0]

@@ -106,6 +106,9 @@ class MapCandidate:
         The energies of the module docstring (NaN where not measured).
     extra : dict
         ``extremity_energy`` for extremity maps.
+    landmark_errors : (L,) float or None
+        With user landmarks: the normalised geodesic distance from where the
+        map sends each landmark to its partner (:mod:`meshcorr.choice.landmark_doubts`).
     """
 
     origin: str
@@ -117,6 +120,7 @@ class MapCandidate:
     landmark_error: float = np.nan
     landmarks_kept: float = np.nan
     extra: dict = field(default_factory=dict)
+    landmark_errors: np.ndarray | None = None  # (L,) how far each landmark is sent from its partner
 
     def to_dict(self) -> dict:
         return {"origin": self.origin, "orientation": rounded(self.orientation, 4),
@@ -161,6 +165,7 @@ def score_candidates(candidates: list[MapCandidate], source, target, source_geod
             score_orientation(candidate, source, target, random_state=random_state, fine=fine)
         if landmarks is not None:
             errors = np.array([target_geodesics(int(b))[mapping[a]] for a, b in landmarks])
+            candidate.landmark_errors = errors
             candidate.landmark_error = float(errors.mean())
             candidate.landmarks_kept = float(np.mean(errors <= LANDMARK_RADIUS))
 

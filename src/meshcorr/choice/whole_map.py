@@ -12,16 +12,21 @@ return them (repaired, :mod:`meshcorr.choice.repair`, and shelled).
 
 from __future__ import annotations
 
+import sys
+import warnings
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
 from ..core.mesh import Mesh
+from ..errors import LandmarkWarning
 from ..runtime.threads import parallel_map
 from ..runtime.timing import StageTimer
 from ..stages.landmarks import landmark_map
 from ..stages.refine import refine_map
 from .extremities import match_extremities, spectrum_extremities
+from .landmark_doubts import landmark_doubts
 from .oriented_start import fit_oriented_map
 from .repair import repair_candidates
 from .confidence import Confidence, choice_confidence
@@ -50,6 +55,7 @@ class WholeMapChoice(NamedTuple):
     shelled: bool = False  # the candidates were judged after meshcorr.stages.shells: the chosen map is final
     orientation: float | None = None  # the chosen map's orientation score, when it is that exact map's
     confidence: Confidence | None = None  # the margin to the best rival map (meshcorr.choice.confidence)
+    landmark_doubts: dict | None = None  # landmark row -> why it looks wrong (meshcorr.choice.landmark_doubts)
 
 
 def whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, spectral_other,
@@ -122,6 +128,11 @@ def whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, sp
     pool = eligible(candidates, reliable=reliable)  # the rivals: maps the rules would have let win
     confidence = choice_confidence(pool, chosen, {id(c): map_energy(c, reliable) for c in pool}, g1, g2,
                                    distortion_sources(src.n_vertices, random_state))
+    doubts = None
+    if pairs is not None:  # warned before the landmarks are pinned below
+        doubts = landmark_doubts(candidates, chosen, pairs, g1, g2, reliable=reliable)
+        if doubts:
+            warn_landmark_doubts(doubts, pairs, src, tgt, fine)
     mapping = chosen.mapping.copy()
     if pairs is not None:
         mapping[pairs[:, 0]] = pairs[:, 1]
@@ -130,4 +141,27 @@ def whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, sp
     shelled = bool(chosen.extra.get("shells"))
     return WholeMapChoice(mapping, other, summaries, chosen.origin == "spectral" and pairs is None and not shelled,
                           shelled, chosen.orientation if pairs is None and np.isfinite(chosen.orientation) else None,
-                          confidence)
+                          confidence, doubts)
+
+
+def warn_landmark_doubts(doubts: dict, pairs: np.ndarray, src: Mesh, tgt: Mesh, fine=None) -> None:
+    """A :class:`~meshcorr.errors.LandmarkWarning` naming each doubted pair by its input vertex numbers.
+
+    On coarse copies (``fine``), a landmark is named by the vertex its
+    coarse vertex was born from (next to the user's vertex). The warning is
+    attributed to the first caller outside meshcorr (the user's line).
+    """
+    named = []
+    for row, why in doubts.items():
+        ends = []
+        for vertex, mesh, copy in zip(pairs[row], (src, tgt), fine or (None, None)):
+            ends.append(int(mesh.kept[vertex]) if copy is None else int(copy.fine.kept[copy.parent[vertex]]))
+        named.append(f"{ends[0]} -> {ends[1]} ({why})")
+    message = (f"{len(doubts)} of the {len(pairs)} landmark pairs look wrong (source vertex -> target vertex, "
+               f"input numbering): {'; '.join(named)}. The map follows the landmarks: check these pairs, or "
+               "leave them out.")
+    package = str(Path(__file__).resolve().parents[1])  # meshcorr/
+    frame, level = sys._getframe(1), 2  # stacklevel 2 is this function's caller
+    while frame is not None and str(Path(frame.f_code.co_filename).resolve()).startswith(package):
+        frame, level = frame.f_back, level + 1
+    warnings.warn(message, LandmarkWarning, stacklevel=level)

@@ -16,7 +16,7 @@ def test_a_round_trip_through_the_truth_stays_and_a_scrambled_one_does_not(creat
     rest, _, truth, back = creature_rest_and_bent_moved
     assert cycle_error(rest, truth, back) < 0.1 * CYCLE_LIMIT  # the two truths are nearest vertices of each other
     scrambled = np.random.default_rng(1).permutation(len(back))
-    assert cycle_error(rest, truth, scrambled) > 2 * CYCLE_LIMIT
+    assert cycle_error(rest, truth, scrambled) > CYCLE_LIMIT  # a random round trip: about the mean distance
     unmapped = truth.copy()
     unmapped[:] = -1  # nothing makes the round trip
     assert np.isnan(cycle_error(rest, unmapped, back))

@@ -202,17 +202,15 @@ def _match_whole(shapes, pairs: np.ndarray | None, settings: Settings, max_memor
     result = _result(src, tgt, aligned, local_map, other_map, choice.summaries, spectral_kept, pairs,
                      settings, dict(mode=mode, max_memory=max_memory, shells=shell_stage), timer)
     if choice.confidence is not None:  # in the input numbering
-        result.confidence = _confidence_report(choice.confidence, src.kept, tgt.kept)
+        result.confidence = _renumbered(choice.confidence.to_dict(), src.kept, tgt.kept)
     return result
 
 
-def _confidence_report(confidence, source_numbers: np.ndarray, target_numbers: np.ndarray) -> dict:
-    """``result.confidence``: :meth:`Confidence.to_dict` with the suggested vertices renumbered."""
-    report = confidence.to_dict()
-    for row in report["suggested_landmarks"]:
-        row.update(source=int(source_numbers[row["source"]]), chosen=int(target_numbers[row["chosen"]]),
-                   rival=int(target_numbers[row["rival"]]))
-    return report
+def _renumbered(report: dict, source_numbers: np.ndarray, target_numbers: np.ndarray) -> dict:
+    """A ``result.confidence`` report with its suggested vertices renumbered (``numbers[v]`` for vertex v)."""
+    rows = [dict(row, source=int(source_numbers[row["source"]]), chosen=int(target_numbers[row["chosen"]]),
+                 rival=int(target_numbers[row["rival"]])) for row in report["suggested_landmarks"]]
+    return dict(report, suggested_landmarks=rows)
 
 
 def _coarse_copies(src: Mesh, tgt: Mesh, settings: Settings, timer: StageTimer) -> tuple | None:
@@ -299,21 +297,9 @@ def _lifted_result(src: Mesh, tgt: Mesh, copies: tuple[CoarseCopy, CoarseCopy], 
         icp_history=coarse.icp_history, icp_converged=coarse.icp_converged, timings=timer.timings,
         background_timings=background, params=params, candidates=coarse.candidates, alternative_map=alternative,
         orientation_reliable=coarse.orientation_reliable, refine_history=history,
-        map_candidates=coarse.map_candidates, confidence=_lifted_confidence(coarse.confidence, copies, src, tgt)),
+        map_candidates=coarse.map_candidates, confidence=None if coarse.confidence is None else _renumbered(
+            coarse.confidence, src.kept[one.parent], tgt.kept[two.parent])),
         src, tgt)
-
-
-def _lifted_confidence(confidence: dict | None, copies: tuple[CoarseCopy, CoarseCopy], src: Mesh,
-                       tgt: Mesh) -> dict | None:
-    """The coarse run's ``confidence`` with its suggested vertices at their fine parents (input numbering)."""
-    if confidence is None:
-        return None
-    report = dict(confidence, suggested_landmarks=[dict(row) for row in confidence["suggested_landmarks"]])
-    for row in report["suggested_landmarks"]:
-        row.update(source=int(src.kept[copies[0].parent[row["source"]]]),
-                   chosen=int(tgt.kept[copies[1].parent[row["chosen"]]]),
-                   rival=int(tgt.kept[copies[1].parent[row["rival"]]]))
-    return report
 
 
 def _spectra(shapes, settings: Settings, mode: str, timer: StageTimer) -> list:

@@ -13,7 +13,9 @@ from meshcorr.choice.extremities import find_extremities, match_extremities
 from meshcorr.stages.landmarks import check_landmarks, landmark_map
 from meshcorr.core.mesh import Mesh, as_mesh
 from meshcorr.core.map_orientation import orientation_score, regional_orientation
-from meshcorr.choice.selection import ORIENTATION_MIN, MapCandidate, choose_map, energy, score_candidates
+from meshcorr.choice import selection
+from meshcorr.choice.selection import (ORIENTATION_MIN, SAME_MAP_DISTANCE, MapCandidate, choose_map, distinct_candidates,
+                                       energy, score_candidates, shell_candidates)
 from meshcorr.stages.shells import shell_refine
 
 from .person import TIPS, person_vertices, scaled_geodesics, tip_vertex
@@ -68,6 +70,81 @@ def test_a_map_with_swapped_legs_is_seen_region_by_region_and_rejected(person):
     assert candidates[0].orientation < 0.1
     chosen, alternative = choose_map(candidates, reliable=True)
     assert chosen.origin == "right" and alternative.origin == "mirror"
+
+
+def _half_turn(mesh) -> np.ndarray:
+    """The person turned half a turn about its long axis (front to back and left to right): each vertex's
+    image is the vertex of the nearest direction turned by pi about z. The arms and legs swap sides, which
+    the person's left/right symmetry hides; only the nose goes where the target has none."""
+    u = mesh.vertices / np.linalg.norm(mesh.vertices, axis=1, keepdims=True)
+    return cKDTree(u).query(u * [-1.0, -1.0, 1.0])[1]
+
+
+def test_the_curvature_term_prefers_a_noisy_right_map_to_a_clean_front_back_turn(person, monkeypatch):
+    # The right map with local noise (each vertex sent to the vertex nearest a point moved by 0.05, about
+    # the edge length) against an exact half turn. Both keep the orientation; the noise distorts the
+    # distances more than the misplaced nose does, so the distortion alone would keep the turn; the
+    # curvature sees the nose on the back of the head.
+    mesh, _ = person
+    rng = np.random.default_rng(0)
+    noisy = cKDTree(mesh.vertices).query(mesh.vertices + rng.normal(scale=0.05, size=mesh.vertices.shape))[1]
+    right, turned = MapCandidate("right", noisy), MapCandidate("turned", _half_turn(mesh))
+    g = scaled_geodesics(mesh)
+    score_candidates([right, turned], mesh, mesh, g, g, reliable=True)
+    assert min(right.orientation, turned.orientation) > 0.8
+    assert right.distortion > 1.2 * turned.distortion
+    assert right.curvature < 0.5 * turned.curvature
+    assert choose_map([turned, right], reliable=True)[0] is right
+    monkeypatch.setattr(selection, "CURVATURE_POWER", 0)  # the term removed: the turn wins
+    assert choose_map([turned, right], reliable=True)[0] is turned
+
+
+def test_near_copies_are_merged_into_the_one_of_least_energy(person):
+    mesh, mirror = person
+    identity = np.arange(mesh.n_vertices)
+    g = scaled_geodesics(mesh)
+    rng = np.random.default_rng(1)
+    moved = cKDTree(mesh.vertices).query(mesh.vertices + rng.normal(scale=0.05, size=mesh.vertices.shape))[1]
+    assert 0 < np.mean(moved != identity) < 0.5  # a near-copy: a few vertices sent to a neighbour
+    candidates = [MapCandidate("copy", moved), MapCandidate("mirror", mirror), MapCandidate("right", identity),
+                  MapCandidate("turned", _half_turn(mesh))]
+    score_candidates(candidates, mesh, mesh, g, g, reliable=True)
+    sources = selection.distortion_sources(mesh.n_vertices)
+    kept, copies = distinct_candidates(candidates, g, sources, reliable=True)
+    assert [c.origin for c in kept] == ["mirror", "right", "turned"]  # in the given order
+    assert [(c.origin, c.same_as) for c in copies] == [("copy", "right")]
+    # A copy is said in the summaries (to_dict), the others are not marked.
+    assert candidates[0].to_dict()["same_as"] == "right" and "same_as" not in candidates[2].to_dict()
+    # The user's landmarks' own map is kept before any copy of it, whatever its energy.
+    pinned = MapCandidate("landmarks", moved.copy())
+    score_candidates([pinned], mesh, mesh, g, g, reliable=True)
+    fresh = [MapCandidate("right", identity), pinned]
+    score_candidates(fresh[:1], mesh, mesh, g, g, reliable=True)
+    assert energy(fresh[0], True) < energy(pinned, True)
+    kept, copies = distinct_candidates(fresh, g, sources, reliable=True)
+    assert [c.origin for c in kept] == ["landmarks"] and copies[0].same_as == "landmarks"
+    # Below the distance nothing is merged.
+    assert SAME_MAP_DISTANCE > 0
+    kept, _ = distinct_candidates(candidates[1:], g, sources, reliable=True)
+    assert len(kept) == 3
+
+
+def test_the_shells_replace_each_kept_candidates_map(person):
+    # The choice judges the maps as the shells return them: each candidate that keeps the orientation
+    # gets the map of meshcorr.stages.shells.shell_refine, not its ZoomOut map with a new label.
+    mesh, mirror = person
+    rng = np.random.default_rng(2)
+    noisy = cKDTree(mesh.vertices).query(mesh.vertices + rng.normal(scale=0.05, size=mesh.vertices.shape))[1]
+    candidates = [MapCandidate("noisy", noisy.copy()), MapCandidate("mirror", mirror.copy())]
+    g = scaled_geodesics(mesh)
+    score_candidates(candidates, mesh, mesh, g, g, reliable=True)
+    refined = shell_candidates(candidates, mesh, mesh, k=20)
+    assert [c.origin for c in refined] == ["noisy"]
+    expected = shell_refine(mesh, mesh, noisy, k=20, orientation=candidates[0].extra["zoomout_orientation"])
+    np.testing.assert_array_equal(candidates[0].mapping, expected)
+    identity = np.arange(mesh.n_vertices)
+    assert np.mean(noisy == identity) < 0.8 and np.mean(expected == identity) > 0.95  # the noise taken out
+    np.testing.assert_array_equal(candidates[1].mapping, mirror)  # the mirror image is left as it is
 
 
 def test_landmarks_settle_the_left_right_choice(person):

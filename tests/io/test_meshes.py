@@ -378,7 +378,7 @@ def test_vertex_count_mismatch_is_an_error(tmp_path, monkeypatch):
     path = export(tmp_path, OCTA_V, OCTA_F, "ply")  # PLY: plain OFF files never reach trimesh.load
     # No real file was found that trimesh reads with another vertex count (OFF no longer reaches it).
     merged = trimesh.Scene(trimesh.Trimesh(OCTA_V[:5], OCTA_F, process=False))
-    monkeypatch.setattr(mio.meshes.trimesh, "load", lambda *args, **kwargs: merged)
+    monkeypatch.setattr(trimesh, "load", lambda *args, **kwargs: merged)
     with pytest.raises(MeshError, match="declares 6 vertices but 5 were read"):
         read_mesh(path)
 

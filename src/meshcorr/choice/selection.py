@@ -82,6 +82,9 @@ CURVATURE_POWER = 3
 REVERSED_FLOOR = 1e-3
 #: A landmark is kept by a map that sends it within this (normalised geodesic distance) of its partner.
 LANDMARK_RADIUS = 0.05
+#: Candidates whose images of the distortion's source vertices lie on average closer than this (normalised
+#: geodesic distance on the target) are one map: only the one of least energy is repaired and shelled.
+SAME_MAP_DISTANCE = 0.015
 
 
 @dataclass
@@ -109,6 +112,9 @@ class MapCandidate:
     landmark_errors : (L,) float or None
         With user landmarks: the normalised geodesic distance from where the
         map sends each landmark to its partner (:mod:`meshcorr.choice.landmark_doubts`).
+    same_as : str or None
+        For a near-copy left out by :func:`distinct_candidates`: the origin of
+        the candidate kept in its place.
     """
 
     origin: str
@@ -121,9 +127,11 @@ class MapCandidate:
     landmarks_kept: float = np.nan
     extra: dict = field(default_factory=dict)
     landmark_errors: np.ndarray | None = None  # (L,) how far each landmark is sent from its partner
+    same_as: str | None = None  # set by distinct_candidates: the origin of the kept copy of this map
 
     def to_dict(self) -> dict:
-        return {"origin": self.origin, "orientation": rounded(self.orientation, 4),
+        copy = {} if self.same_as is None else {"same_as": self.same_as}
+        return {"origin": self.origin, **copy, "orientation": rounded(self.orientation, 4),
                 "distortion": rounded(self.distortion, 5), "curvature": rounded(self.curvature, 4),
                 "regional_orientation": rounded(self.regional_orientation, 4),
                 "landmark_error": rounded(self.landmark_error, 5),
@@ -284,6 +292,51 @@ def energy(candidate: MapCandidate, reliable: bool) -> float:
         for orientation in (candidate.extra["zoomout_orientation"], candidate.orientation):
             value *= max(1.0 - orientation, REVERSED_FLOOR)
     return value
+
+
+def distinct_candidates(candidates: list[MapCandidate], target_geodesics, sources: np.ndarray, *,
+                        reliable: bool) -> tuple[list[MapCandidate], list[MapCandidate]]:
+    """The candidates without near-copies: of each group of one map, the one of least :func:`energy`.
+
+    Starts from different tips often end, after ZoomOut, at the same map
+    (a TOSCA pair: six of eight candidates within 0.004 of one another).
+    Repairing and shelling each copy costs the same as a different map and
+    changes nothing the choice can see, so before those steps the
+    candidates are taken in order of energy (the user's landmarks' own map
+    first: the shells hold it to them) and one is dropped when it
+    sends the ``sources`` on average within :data:`SAME_MAP_DISTANCE` of
+    where a kept candidate sends them.
+
+    Parameters
+    ----------
+    candidates : list of MapCandidate
+        Scored (:func:`score_candidates`).
+    target_geodesics : callable
+        ``f(i)``: normalised geodesic distances from target vertex i, ``(n2,)``.
+    sources : (m,) int
+        Source vertices at which the maps are compared (:func:`distortion_sources`).
+    reliable : bool
+        As :func:`energy`.
+
+    Returns
+    -------
+    kept : list of MapCandidate
+        In the order of ``candidates``.
+    copies : list of MapCandidate
+        The others, each with :attr:`MapCandidate.same_as` set.
+    """
+    sources = np.asarray(sources, dtype=np.int64)
+    kept: list[tuple[MapCandidate, list[np.ndarray]]] = []
+    for candidate in sorted(candidates, key=lambda c: (c.origin != "landmarks", energy(c, reliable))):
+        images = candidate.mapping[sources]
+        for other, rows in kept:
+            if np.mean([row[i] for row, i in zip(rows, images)]) < SAME_MAP_DISTANCE:
+                candidate.same_as = other.origin
+                break
+        else:
+            kept.append((candidate, [np.asarray(target_geodesics(int(t))) for t in images]))
+    survivors = {id(c) for c, _ in kept}
+    return [c for c in candidates if id(c) in survivors], [c for c in candidates if id(c) not in survivors]
 
 
 def shell_candidates(candidates: list[MapCandidate], source, target, *, k: int,

@@ -32,8 +32,8 @@ from .repair import repair_candidates
 from .confidence import Confidence, choice_confidence
 from .sign_search import sign_search_starts
 from .selection import energy as map_energy
-from .selection import (MapCandidate, candidate_summaries, choose_map, distortion_sources, eligible, score_candidates,
-                        shell_candidates)
+from .selection import (MapCandidate, candidate_summaries, choose_map, distinct_candidates, distortion_sources,
+                        eligible, score_candidates, shell_candidates)
 
 __all__ = ["EXTREMITY_STARTS", "WholeMapChoice", "whole_map_choice"]
 
@@ -115,12 +115,16 @@ def whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, sp
             candidates.append(MapCandidate(origin, mapping, extra=extra))
         score_candidates(candidates, src, tgt, g1, g2, reliable=reliable, landmarks=pairs, random_state=random_state,
                          fine=fine)
+    copies: list[MapCandidate] = []  # near-copies of kept candidates: listed in the summaries only
     if shells and reliable:  # judge the maps as they will be returned (module docstrings of these steps)
         with timer.stage("shells"):
             scored = dict(reliable=reliable, landmarks=pairs, random_state=random_state, fine=fine)
+            sources = distortion_sources(src.n_vertices, random_state)
+            candidates, copies = distinct_candidates(candidates, g2, sources, reliable=reliable)  # repaired once
             repaired = repair_candidates(candidates, src, tgt, k=refine_k, random_state=random_state)
             score_candidates(repaired, src, tgt, g1, g2, **scored)
-            candidates += repaired
+            candidates, more = distinct_candidates(candidates + repaired, g2, sources, reliable=reliable)  # shelled once
+            copies += more
             final = shell_candidates(candidates, src, tgt, k=refine_k, landmarks=pairs, descriptors=described,
                                      random_state=random_state)
             score_candidates(final, src, tgt, g1, g2, **scored)
@@ -137,7 +141,7 @@ def whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, sp
     if pairs is not None:
         mapping[pairs[:, 0]] = pairs[:, 1]
     other = alternative.mapping if alternative is not None else spectral_other
-    summaries = candidate_summaries(candidates, chosen, alternative, reliable=reliable)
+    summaries = candidate_summaries(candidates + copies, chosen, alternative, reliable=reliable)
     shelled = bool(chosen.extra.get("shells"))
     return WholeMapChoice(mapping, other, summaries, chosen.origin == "spectral" and pairs is None and not shelled,
                           shelled, chosen.orientation if pairs is None and np.isfinite(chosen.orientation) else None,

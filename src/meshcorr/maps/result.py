@@ -465,6 +465,45 @@ class Correspondence:
         src, tgt = self._meshes("show")
         return show(src, tgt, self.local_map(), **options)
 
+    def pick(self, output: str | os.PathLike | None = None, *, port: int = 0, **options):
+        """Click landmark pairs on both meshes in the browser, and match again with them.
+
+        The picker of ``meshcorr pick`` (:mod:`meshcorr.viz.pick`), served
+        from a background thread on 127.0.0.1 and shown in a frame in a
+        notebook (or open ``picker.url``); it starts from this map and its
+        suggested landmarks (``confidence``). "Match again" runs
+        :func:`meshcorr.match` on these meshes with the pairs and ``options``.
+
+        Parameters
+        ----------
+        output : path, optional
+            The landmark file "Save" writes; None: the pairs stay in ``picker.landmarks``.
+        port : int
+            0: a free port.
+        **options
+            Options of :func:`meshcorr.match` for "Match again".
+
+        Returns
+        -------
+        picker : meshcorr.viz.pick.Picker
+            ``picker.landmarks`` ``(L, 2)`` int, input numbering (``landmarks=`` of
+            :func:`meshcorr.match`); ``picker.mapping`` the latest map; ``picker.close()``.
+        """
+        from ..viz.pick import Picker, PickSession
+
+        src, tgt = self._meshes("pick")
+
+        def matcher(pairs, progress):
+            from ..pipeline.run import match
+
+            result = match(src, tgt, landmarks=pairs.tolist() if len(pairs) else None, progress=progress, **options)
+            return result.local_map(), result.confidence
+
+        session = PickSession((src.vertices, src.faces), (tgt.vertices, tgt.faces), mapping=self.local_map(),
+                              output=output, matcher=matcher, confidence=self.confidence,
+                              source_ids=src.kept, target_ids=tgt.kept)
+        return Picker(session, port=port)
+
     # ------------------------------------------------------------------ files
 
     def save(self, path: str | os.PathLike) -> None:

@@ -439,7 +439,7 @@ class _Handler(BaseHTTPRequestHandler):
 
     def close(self, _):
         self._send(200, {"closing": True})
-        self.server.request_close()
+        self.server.request_close(self.server.close_grace)
 
 
 _ROUTES = {("GET", "/"): _Handler.page, ("GET", "/api/meshes"): _Handler.meshes, ("GET", "/api/map"): _Handler.map,
@@ -459,8 +459,8 @@ class PickServer(ThreadingHTTPServer):
     url : str
         The page's address, token included.
     closed : threading.Event
-        Set when the page asked to close and did not come back within :data:`CLOSE_GRACE` seconds
-        (the server stops serving then).
+        Set when the page asked to close and did not come back within ``close_grace`` seconds
+        (:data:`CLOSE_GRACE`; the server stops serving then).
     """
 
     daemon_threads = True
@@ -473,6 +473,7 @@ class PickServer(ThreadingHTTPServer):
         self.hosts = {f"127.0.0.1:{self.port}", f"localhost:{self.port}"}
         self.url = f"http://127.0.0.1:{self.port}/?token={self.token}"
         self.closed = threading.Event()
+        self.close_grace = CLOSE_GRACE
         self._last = time.monotonic()
 
     def touch(self) -> None:

@@ -211,3 +211,23 @@ def test_the_picker_serves_from_a_thread_and_shows_a_frame(tmp_path):
         connection.close()
         np.testing.assert_array_equal(picker.landmarks, [[1, 2]])
     assert not picker._thread.is_alive()
+
+
+# Tiny tubes and k=6 (passed through to match): the maps without landmarks are far off, so the run doubts
+# the true pairs it is given (a LandmarkWarning) and follows them.
+@pytest.mark.filterwarnings("ignore::meshcorr.errors.LandmarkWarning")
+def test_result_pick_starts_from_the_map_and_matches_again(tmp_path):
+    import meshcorr
+
+    result = meshcorr.match((SOURCE.vertices, SOURCE.faces), (TARGET.vertices, TARGET.faces))
+    with result.pick(tmp_path / "l.txt", k=6) as picker:
+        session = picker.session
+        np.testing.assert_array_equal(picker.mapping, result.map)
+        assert session.status()["can_match"] and session.map_payload()["version"] == 1
+        truth = datasets.ground_truth(SOURCE, TARGET)
+        pairs = [[0, int(truth[0])], [40, int(truth[40])]]
+        session.start_match(pairs)
+        assert session.wait(60)["state"] == "done", session.status()
+        assert session.map_payload()["version"] == 2
+        assert picker.mapping[0] == truth[0] and picker.mapping[40] == truth[40]
+        np.testing.assert_array_equal(picker.landmarks, pairs)

@@ -24,6 +24,10 @@ from ..core.mesh import Mesh
 from ..stages.reorder import Configuration
 from ..core.geodesics import DEFAULT_GEODESIC
 
+#: The ``match`` function "Match again" of :meth:`Correspondence.pick` runs; :mod:`meshcorr.pipeline.run` sets
+#: it to :func:`meshcorr.match` when it loads (``maps`` is below ``pipeline`` and may not import it).
+RERUN = None
+
 #: Array attributes written by :meth:`Correspondence.save`.
 _ARRAYS = ("map", "cost", "source_vertices", "target_vertices", "source_embedding", "target_embedding",
            "aligned_target_embedding", "anchors", "alternative_map", "matched_region")
@@ -472,7 +476,9 @@ class Correspondence:
         from a background thread on 127.0.0.1 and shown in a frame in a
         notebook (or open ``picker.url``); it starts from this map and its
         suggested landmarks (``confidence``). "Match again" runs
-        :func:`meshcorr.match` on these meshes with the pairs and ``options``.
+        :func:`meshcorr.match` on these meshes with the pairs and ``options``
+        (offered once :mod:`meshcorr.pipeline.run` is loaded: ``meshcorr.match``
+        made this result or was used since).
 
         Parameters
         ----------
@@ -492,15 +498,14 @@ class Correspondence:
         from ..viz.pick import Picker, PickSession
 
         src, tgt = self._meshes("pick")
+        rerun = RERUN
 
         def matcher(pairs, progress):
-            from ..pipeline.run import match
-
-            result = match(src, tgt, landmarks=pairs.tolist() if len(pairs) else None, progress=progress, **options)
+            result = rerun(src, tgt, landmarks=pairs.tolist() if len(pairs) else None, progress=progress, **options)
             return result.local_map(), result.confidence
 
         session = PickSession((src.vertices, src.faces), (tgt.vertices, tgt.faces), mapping=self.local_map(),
-                              output=output, matcher=matcher, confidence=self.confidence,
+                              output=output, matcher=None if rerun is None else matcher, confidence=self.confidence,
                               source_ids=src.kept, target_ids=tgt.kept)
         return Picker(session, port=port)
 

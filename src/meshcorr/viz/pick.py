@@ -223,7 +223,8 @@ class PickSession:
             tgt, step2 = mesh_payload(self._V2, self._F2, grey.repeat(self.n[1], 0), self._max_faces)
             data = {"source": src, "target": tgt, "names": list(self.names), "thinned": max(step1, step2),
                     "camera": camera_frame(30.0, -60.0, "z").ravel().round(12).tolist(),
-                    "ids": [self.ids[0].tolist(), self.ids[1].tolist()]}
+                    "ids": [None if np.array_equal(ids, np.arange(n)) else ids.tolist()
+                            for ids, n in zip(self.ids, self.n)]}
             self._meshes_json = json.dumps(data, separators=(",", ":")).encode()
         return self._meshes_json
 

@@ -41,7 +41,7 @@
   function changed() {
     body.dataset.pairs = String(state.pairs.length);
     renderTable();
-    scene.redraw();
+    scene.refresh();
     api("POST", "/api/landmarks", { pairs: inputPairs() }).catch(function (e) { say(e.message, true); });
   }
 
@@ -57,7 +57,7 @@
       tr.querySelector(".move").addEventListener("click", function () {
         state.moving = state.moving === k ? null : k; state.pending = null;
         say(state.moving === null ? "" : "Click the new place of pair " + (k + 1) + " on either view (Esc: cancel).");
-        renderTable(); scene.redraw();
+        renderTable(); scene.refresh();
       });
       tr.querySelector(".delete").addEventListener("click", function () {
         state.pairs.splice(k, 1); state.moving = null;
@@ -88,7 +88,7 @@
     }
     state.pending = { side: side, vertex: vertex };
     say("Now click its partner on the " + (side ? "source" : "target") + ".");
-    scene.redraw();
+    scene.refresh();
   }
 
   // --------------------------------------------------------------------------- drawing
@@ -194,7 +194,10 @@
   }
 
   function start(meshes) {
-    state.ids = meshes.ids;
+    state.ids = meshes.ids.map(function (ids, side) {  // null: the input's own numbering
+      var n = meshes[side ? "target" : "source"].vertices.length / 3;
+      return ids || Array.from({ length: n }, function (_, i) { return i; });
+    });
     scene = MeshcorrViewer.scene(meshes.camera);
     views.source = scene.addView(document.getElementById("view-source"), meshes.source);
     views.target = scene.addView(document.getElementById("view-target"), meshes.target);
@@ -204,7 +207,7 @@
     scene.onClick = click;
     scene.onHover = function (view, vertex) {
       var v = view === views.source ? vertex : -1;
-      if (v !== state.hover) { state.hover = v; if (state.map) { scene.redraw(); } }
+      if (v !== state.hover) { state.hover = v; if (state.map) { scene.refresh(); } }
     };
     document.getElementById("save").addEventListener("click", save);
     var matchButton = document.getElementById("match");
@@ -213,7 +216,7 @@
     document.getElementById("reset").addEventListener("click", function () { scene.reset(); });
     document.getElementById("close").addEventListener("click", closePicker);
     document.addEventListener("keydown", function (e) {
-      if (e.key === "Escape") { state.moving = null; state.pending = null; say(""); renderTable(); scene.redraw(); }
+      if (e.key === "Escape") { state.moving = null; state.pending = null; say(""); renderTable(); scene.refresh(); }
     });
     window.addEventListener("pagehide", function () {
       if (body.dataset.closed !== "yes") { navigator.sendBeacon("/api/close?token=" + encodeURIComponent(config.token)); }

@@ -4,8 +4,9 @@
 //
 // MeshcorrViewer.scene(camera) makes a scene: one rotation and one zoom shared by its views.
 // scene.addView(canvas, mesh) adds a view of {vertices, faces, colors} (flat arrays); dragging any
-// view turns all of them, the wheel zooms all of them. While a drag lasts, a view draws at most
-// FAST_FACES faces (large meshes stay interactive), then all of them once the mouse is released.
+// view turns all of them, the wheel zooms all of them. While a drag or zoom lasts, a view draws at
+// most FAST_FACES faces (large meshes stay interactive), then all of them once it pauses. Markers a
+// page draws over the mesh (view.overlay) are redrawn alone by scene.refresh().
 // A press and release without movement is a click: scene.onClick(view, vertex, event), with the
 // vertex under the pointer (-1: none). scene.onHover(view, vertex) follows the pointer.
 (function () {
@@ -103,15 +104,24 @@
       }
     }
 
+    // The mesh is drawn into an off-screen canvas; the markers (view.overlay) on a copy of it, so that
+    // they move without drawing the mesh again (view.refresh).
+    var base = document.createElement("canvas");
+    view.refresh = function () {
+      var ctx = canvas.getContext("2d");
+      ctx.drawImage(base, 0, 0);
+      if (view.overlay) { view.overlay(ctx, view); }
+    };
     view.draw = function (fast) {
       var started = performance.now();
-      var ctx = canvas.getContext("2d");
+      base.width = canvas.width; base.height = canvas.height;
+      var ctx = base.getContext("2d");
       ctx.fillStyle = "#f4f4f4";
       ctx.fillRect(0, 0, canvas.width, canvas.height);
       var s = project();
       if (m === 0) { drawCloud(ctx, view.colors); }
       drawFaces(ctx, view.colors, s, fast ? Math.max(1, Math.ceil(m / FAST_FACES)) : 1);
-      if (view.overlay) { view.overlay(ctx, view); }
+      view.refresh();
       view.matrix = scene.R.slice();
       view.drawn += 1;
       view.ms = performance.now() - started;
@@ -166,9 +176,12 @@
 
   function scene(camera) {
     var sc = { R: camera.slice(), zoom: 1, views: [], dragging: false, onClick: null, onHover: null };
-    var pending = false, pendingFast = false;
+    var pending = false, pendingFast = false, settle = null;
+    // fast: at most FAST_FACES faces now, and every face once the interaction has paused for 250 ms.
     sc.redraw = function (fast) {
       pendingFast = pending ? pendingFast && !!fast : !!fast;
+      if (settle !== null) { clearTimeout(settle); settle = null; }
+      if (fast) { settle = setTimeout(function () { settle = null; if (!sc.dragging) { sc.redraw(false); } }, 250); }
       if (pending) { return; }
       pending = true;
       window.requestAnimationFrame(function () {
@@ -176,6 +189,7 @@
         sc.views.forEach(function (v) { v.draw(pendingFast); });
       });
     };
+    sc.refresh = function () { sc.views.forEach(function (v) { v.refresh(); }); };  // the markers only
     sc.drawNow = function () { sc.views.forEach(function (v) { v.draw(false); }); };
     sc.rotate = function (ax, ay) { sc.R = rotation(sc.R, ax, ay); };
     sc.reset = function () { sc.R = camera.slice(); sc.zoom = 1; sc.redraw(); };
@@ -218,7 +232,7 @@
     });
     canvas.addEventListener("wheel", function (e) {
       sc.zoom = Math.min(20, Math.max(0.2, sc.zoom * Math.exp(-0.0015 * e.deltaY)));
-      sc.redraw(false);
+      sc.redraw(true);
       e.preventDefault();
     }, { passive: false });
     canvas.addEventListener("touchstart", function (e) {

@@ -6,12 +6,13 @@ import http.client
 import json
 import threading
 import time
+import warnings
 
 import numpy as np
 import pytest
 
 from meshcorr import datasets
-from meshcorr.errors import ParameterError
+from meshcorr.errors import LandmarkWarning, ParameterError
 from meshcorr.stages.landmarks import read_landmarks
 from meshcorr.viz.pick import PickSession, Picker, landmark_text, start_server
 
@@ -130,19 +131,22 @@ def test_match_runs_in_a_worker_and_the_map_honours_the_landmarks(served):
     def matcher(pairs, progress):
         calls.append(pairs.copy())
         progress("fake", 1, 2)
+        warnings.warn("Landmark 0 looks odd.", LandmarkWarning)
         time.sleep(0.2)
         mapping = np.arange(N)
         mapping[pairs[:, 0]] = pairs[:, 1]
         return mapping, {"low": True, "margin": 0.1,
                          "suggested_landmarks": [{"source": 3, "chosen": 3, "rival": 40}]}
 
-    session, _, request = served(matcher=matcher)
+    session, _, request = served(matcher=matcher, record_warnings=True)
     assert request("GET", "/api/map")[1]["map"] is None
     assert request("POST", "/api/match", {"pairs": [[0, 10]]})[0] == 202
     status, answer = request("POST", "/api/match", {"pairs": [[0, 10]]})
     assert status == 400 and "running already" in answer["error"]
     assert request("GET", "/api/status")[1]["stage"] in ("starting", "fake")
-    assert session.wait(10)["state"] == "done"
+    status = session.wait(10)
+    assert status["state"] == "done" and status["fraction"] == 1.0 and status["landmarks"] == 1
+    assert status["warnings"] == ["Landmark 0 looks odd."]  # for the page, not through to the terminal
     payload = request("GET", "/api/map")[1]
     assert payload["version"] == 1 and payload["map"][0] == 10 and payload["map"][1] == 1
     assert payload["suggestions"] == [{"source": 3, "chosen": 3, "rival": 40}] and payload["low"]

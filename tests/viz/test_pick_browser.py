@@ -49,22 +49,31 @@ def picker(tmp_path_factory):
         return result.map, result.confidence
 
     session = PickSession((SOURCE.vertices, SOURCE.faces), (TARGET.vertices, TARGET.faces),
-                          output=folder / "landmarks.txt", matcher=matcher)
-    server = start_server(session)
-    server.close_grace = 0.3
-    thread = threading.Thread(target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True)
-    thread.start()
+                          output=folder / "landmarks.txt", matcher=matcher, record_warnings=True)
+    server = _serve(session)
     with sync_api.sync_playwright() as playwright:
         browser = playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
-        page = browser.new_page(viewport={"width": 1200, "height": 1000})
-        errors = []
-        page.on("pageerror", lambda error: errors.append(str(error)))
-        page.goto(server.url)
-        page.wait_for_selector("body[data-status=ok]", timeout=15000)
-        yield page, session, server, folder
+        page, errors = _open(browser, server)
+        yield page, session, server, folder, browser
         assert errors == []
         browser.close()
     server.server_close()
+
+
+def _serve(session):
+    server = start_server(session)
+    server.close_grace = 0.3
+    threading.Thread(target=server.serve_forever, kwargs={"poll_interval": 0.05}, daemon=True).start()
+    return server
+
+
+def _open(browser, server):
+    page = browser.new_page(viewport={"width": 1200, "height": 1000})
+    errors = []
+    page.on("pageerror", lambda error: errors.append(str(error)))
+    page.goto(server.url)
+    page.wait_for_selector("body[data-status=ok]", timeout=15000)
+    return page, errors
 
 
 def _click(page, side: str, vertex: int) -> None:
@@ -80,10 +89,8 @@ def _pairs_to_click(page, count: int) -> list[tuple[int, int]]:
     return [(v, int(TRUTH[v])) for v in both[:: len(both) // count][:count]]
 
 
-# The third pair is displaced on purpose: the run warns that it looks wrong, and follows it.
-@pytest.mark.filterwarnings("ignore::meshcorr.errors.LandmarkWarning")
 def test_click_pairs_delete_move_save_and_match_again(picker):
-    page, session, server, folder = picker
+    page, session, server, folder, _ = picker
     pairs = _pairs_to_click(page, 4)
     (s1, t1), (s2, t2), (s3, t3), (_, t4) = pairs
     _click(page, "source", s1); _click(page, "target", t1)
@@ -110,6 +117,8 @@ def test_click_pairs_delete_move_save_and_match_again(picker):
     page.click("#match")
     page.wait_for_selector("body[data-match=done]", timeout=60000)
     assert page.get_attribute("body", "data-version") == "1"
+    # The third pair is displaced on purpose: the run warns that it looks wrong (shown on the page), and follows it.
+    assert "look wrong" in page.text_content("#message") and "Warning:" in page.text_content("#message")
     mapping = session.mapping
     for s, t in ((s1, t1), (s3, t3), (s2, t4)):
         assert mapping[s] == t
@@ -144,7 +153,7 @@ def test_orbit_and_zoom_move_both_views(picker):
 
 
 def test_requests_without_the_token_or_outside_the_routes_are_refused(picker):
-    page, _, server, _ = picker
+    page, _, server, _, _ = picker
     assert page.evaluate("fetch('/api/status').then(r => r.status)") == 403  # the page's own fetch, no token
     for path, status in ((f"/../pyproject.toml?token={server.token}", 404), ("/../pyproject.toml", 403)):
         connection = http.client.HTTPConnection("127.0.0.1", server.port, timeout=10)
@@ -154,7 +163,24 @@ def test_requests_without_the_token_or_outside_the_routes_are_refused(picker):
         connection.close()
 
 
+def test_suggested_landmarks_are_marked_and_named(picker):
+    browser = picker[4]
+    confidence = {"low": True, "margin": 0.02, "suggested_landmarks": [{"source": 5, "chosen": 7, "rival": 150}]}
+    session = PickSession((SOURCE.vertices, SOURCE.faces), (TARGET.vertices, TARGET.faces),
+                          mapping=np.arange(SOURCE.n_vertices), confidence=confidence)
+    server = _serve(session)
+    page, errors = _open(browser, server)
+    text = page.text_content("#suggestions")
+    assert "unsure (margin 0.02)" in text and "source 5 (a: target 7, b: 150)" in text
+    assert page.get_attribute("#suggestions", "class") == "note low"
+    assert page.evaluate("meshcorrPick.state.suggestions") == confidence["suggested_landmarks"]
+    assert page.get_attribute("#match", "disabled") == ""  # no matcher: no "Match again"
+    page.close(run_before_unload=True)  # closing the page ends the server
+    assert server.closed.wait(5) and errors == []
+    server.server_close()
+
+
 def test_close_ends_the_server(picker):
-    page, _, server, _ = picker
+    page, _, server, _, _ = picker
     page.click("#close")
     assert server.closed.wait(5)

@@ -108,7 +108,8 @@ def run(args) -> int:
     landmarks = None if args.landmarks_file is None else read_landmarks(args.landmarks_file)
     try:
         session = PickSession(source, target, mapping=mapping, landmarks=landmarks, output=args.output,
-                              matcher=_matcher(source, target, options), names=(args.source, args.target))
+                              matcher=_matcher(source, target, options), names=(args.source, args.target),
+                              record_warnings=True)
     except ParameterError as exc:  # a landmark off the meshes: the file is at fault
         raise InputError(f"--landmarks {args.landmarks_file}: {exc}") from None
     server = start_server(session, port=args.port)

@@ -40,6 +40,7 @@ import json
 import secrets
 import threading
 import time
+import warnings
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 from typing import Callable
@@ -51,6 +52,7 @@ from ..errors import MeshcorrError, ParameterError
 from ..io import atomic_write
 from ..maps.colors import mesh_coloring
 from ..maps.transfer import check_map
+from ..runtime.progress import RunProgress
 from .render import camera_frame
 from .report import mesh_payload, viewer_script
 
@@ -113,6 +115,11 @@ class PickSession:
         The meshes' names on the page and in the saved file.
     max_faces : int
         Faces per mesh sent to the page.
+    record_warnings : bool
+        Keep the warnings of "Match again" (a landmark that looks wrong, an unsure choice) for the
+        page (``status()["warnings"]``) instead of letting them through. Python's warning filters
+        are process-wide: while a match runs, warnings of other threads are caught too (the
+        command line sets it; a notebook, where other code runs meanwhile, should not).
 
     Raises
     ------
@@ -122,7 +129,8 @@ class PickSession:
 
     def __init__(self, source, target, *, mapping=None, landmarks=None, output=None,
                  matcher: Matcher | None = None, confidence: dict | None = None, source_ids=None,
-                 target_ids=None, names: tuple[str, str] = ("source", "target"), max_faces: int = MAX_FACES):
+                 target_ids=None, names: tuple[str, str] = ("source", "target"), max_faces: int = MAX_FACES,
+                 record_warnings: bool = False):
         (self._V1, self._F1), (self._V2, self._F2) = source, target
         self.n = (len(self._V1), len(self._V2))
         self.ids = [np.arange(n) if ids is None else np.asarray(ids, dtype=np.int64)
@@ -141,7 +149,9 @@ class PickSession:
         if landmarks is not None and len(landmarks):
             self._pairs = self.to_drawn(landmarks)
         self.saved: int | None = None
-        self._run = {"state": "idle", "stage": "", "done": 0, "total": 0, "error": None}
+        self._record_warnings = record_warnings
+        self._run = {"state": "idle", "stage": "", "done": 0, "total": 0, "error": None, "warnings": []}
+        self._plan: RunProgress | None = None
 
     # ------------------------------------------------------------- numbering
 
@@ -251,9 +261,16 @@ class PickSession:
                 "margin": None if margin is None else float(margin)}
 
     def status(self) -> dict:
-        """``/api/status``: the run of "Match again", the map's version and the saved count."""
+        """``/api/status``: the run of "Match again" (with the share of it done and an estimate of the
+        seconds left while it runs), the map's version and the saved count."""
         with self._lock:
-            return {**self._run, "version": self._version, "saved": self.saved,
+            plan = self._plan
+            if plan is not None and self._run["state"] == "running":
+                plan.tick()
+            left = None if plan is None else plan.seconds_left()
+            return {**self._run, "version": self._version, "saved": self.saved, "landmarks": len(self._pairs),
+                    "fraction": 0.0 if plan is None else round(plan.fraction, 4),
+                    "seconds_left": None if left is None else round(left, 1),
                     "can_match": self._matcher is not None,
                     "output": None if self.output is None else str(self.output)}
 
@@ -268,7 +285,9 @@ class PickSession:
             if self._run["state"] == "running":
                 raise ParameterError("A match is running already; wait for it to end.")
             self._pairs = pairs
-            self._run = {"state": "running", "stage": "starting", "done": 0, "total": 0, "error": None}
+            self._run = {"state": "running", "stage": "starting", "done": 0, "total": 0, "error": None,
+                         "warnings": []}
+            self._plan = RunProgress()
         threading.Thread(target=self._match, args=(self.to_input(pairs),), daemon=True,
                          name="meshcorr-pick-match").start()
 
@@ -282,8 +301,18 @@ class PickSession:
     def _progress(self, stage, done, total) -> None:
         with self._lock:
             self._run.update(stage=str(stage), done=int(done or 0), total=int(total or 0))
+            self._plan.update(str(stage), int(done or 0), int(total or 0))
 
     def _match(self, pairs: np.ndarray) -> None:
+        if not self._record_warnings:
+            return self._run_matcher(pairs)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            self._run_matcher(pairs)
+        with self._lock:
+            self._run["warnings"] = [str(w.message) for w in caught]
+
+    def _run_matcher(self, pairs: np.ndarray) -> None:
         try:
             mapping, confidence = self._matcher(pairs, self._progress)
             mapping = check_map(mapping, *self.n)
@@ -296,6 +325,7 @@ class PickSession:
                 self._map, self._confidence = mapping, confidence
                 self._version += 1
                 self._run.update(state="done", stage="done")
+                self._plan.finish()
             return
         with self._lock:
             self._run.update(state="error", error=error)

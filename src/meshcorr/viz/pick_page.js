@@ -171,19 +171,30 @@
   function poll() {
     api("GET", "/api/status").then(function (s) {
       progress.hidden = s.state !== "running";
-      if (s.total > 0) { progress.max = s.total; progress.value = s.done; } else { progress.removeAttribute("value"); }
-      if (s.state === "running") { say("Matching: " + s.stage + (s.total ? " " + s.done + "/" + s.total : "") + "..."); setTimeout(poll, 250); return; }
-      body.dataset.match = s.state;
-      if (s.state === "error") { say("Match failed: " + s.error, true); return; }
-      loadMap().then(function () { say("New map with " + state.pairs.length + " landmarks."); });
+      progress.value = s.fraction;
+      if (s.state === "running") {
+        say("Matching: " + s.stage + ", " + Math.round(100 * s.fraction) + "%" +
+            (s.seconds_left === null ? "" : ", ~" + Math.ceil(s.seconds_left) + " s left") + "...");
+        setTimeout(poll, 250); return;
+      }
+      matchButton().disabled = false;
+      var warned = s.warnings.length ? " Warning: " + s.warnings.join(" Warning: ") : "";
+      if (s.state === "error") { body.dataset.match = "error"; say("Match failed: " + s.error, true); return; }
+      loadMap().then(function () {
+        say("New map with " + s.landmarks + " landmark pairs." + warned, warned !== "");
+        body.dataset.match = "done";
+      });
     }).catch(function (e) { say(e.message, true); body.dataset.match = "error"; });
   }
 
+  function matchButton() { return document.getElementById("match"); }
+
   function matchAgain() {
     body.dataset.match = "running";
+    matchButton().disabled = true;
     api("POST", "/api/match", { pairs: inputPairs() }).then(function () {
       progress.hidden = false; say("Matching..."); poll();
-    }).catch(function (e) { body.dataset.match = "error"; say(e.message, true); });
+    }).catch(function (e) { body.dataset.match = "error"; matchButton().disabled = false; say(e.message, true); });
   }
 
   function closePicker() {

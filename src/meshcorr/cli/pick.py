@@ -32,8 +32,9 @@ TARGET). 'Match again' runs meshcorr match with the pairs (and the --set
 options) in this process, with a progress bar, and shows the new map; the
 regions whose landmarks would settle the map's global choice (left/right,
 front/back, which limb is which) are marked with dashed rings: click those
-first. The warning of 'meshcorr match' about an unsure choice names this
-command.
+first (a --map file holds no such report: they appear after 'Match again').
+The run's warnings (a pair that looks wrong) are shown on the page. The
+warning of 'meshcorr match' about an unsure choice names this command.
 
 --landmarks FILE starts from the pairs in FILE (it may also be the -o file).
 Closing the page, 'Close' on it, or Ctrl-C here stops the server; -o keeps
@@ -120,8 +121,9 @@ def run(args) -> int:
             print(f"meshcorr: the picker is at {server.url}", file=sys.stderr, flush=True)
         if not args.quiet:
             print("meshcorr: close the page or press Ctrl-C to stop", file=sys.stderr, flush=True)
-        if not args.no_browser:
-            webbrowser.open(server.url)
+        if not args.no_browser and not webbrowser.open(server.url) and not args.quiet:
+            print("meshcorr: no browser could be started here: open the address above in one",
+                  file=sys.stderr, flush=True)
         server.serve_forever(poll_interval=0.2)
     except KeyboardInterrupt:
         _farewell(args, session)

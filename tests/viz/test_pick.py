@@ -235,3 +235,15 @@ def test_result_pick_starts_from_the_map_and_matches_again(tmp_path):
         assert session.map_payload()["version"] == 2
         assert picker.mapping[0] == truth[0] and picker.mapping[40] == truth[40]
         np.testing.assert_array_equal(picker.landmarks, pairs)
+
+
+def test_a_bad_content_length_is_refused(served):
+    _, server, _ = served()
+    connection = http.client.HTTPConnection("127.0.0.1", server.port, timeout=10)
+    connection.putrequest("POST", "/api/save")
+    connection.putheader("X-Meshcorr-Token", server.token)
+    connection.putheader("Content-Length", "many")
+    connection.endheaders()
+    answer = connection.getresponse()
+    assert answer.status == 400 and "Content-Length must be a number" in json.loads(answer.read())["error"]
+    connection.close()

@@ -159,13 +159,16 @@ class PickSession:
         """``(L, 2)`` int: input-numbered pairs in the drawn meshes' numbering (ParameterError if one is not drawn)."""
         pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
         out = np.empty_like(pairs)
-        for column, ids, side in ((0, self.ids[0], "source"), (1, self.ids[1], "target")):
-            lookup = {int(v): i for i, v in enumerate(ids)} if len(pairs) else {}
-            for row, value in enumerate(pairs[:, column]):
-                if int(value) not in lookup:
-                    raise ParameterError(f"Landmark {row}: {side} vertex {int(value)} is not a vertex of the "
-                                         f"{side} mesh drawn (it has {self.n[column]} vertices, 0-based).")
-                out[row, column] = lookup[int(value)]
+        for column, side in ((0, "source"), (1, "target")):
+            ids = self.ids[column]
+            order = np.argsort(ids, kind="stable")
+            at = np.minimum(np.searchsorted(ids, pairs[:, column], sorter=order), len(ids) - 1)
+            found = ids[order[at]] == pairs[:, column]
+            if not found.all():
+                row = int(np.flatnonzero(~found)[0])
+                raise ParameterError(f"Landmark {row}: {side} vertex {int(pairs[row, column])} is not a vertex of "
+                                     f"the {side} mesh drawn (it has {self.n[column]} vertices, 0-based).")
+            out[:, column] = order[at]
         return out
 
     def to_input(self, pairs) -> np.ndarray:
@@ -420,9 +423,12 @@ class _Handler(BaseHTTPRequestHandler):
             return self._send(400, {"error": str(exc)})
 
     def _body(self):
-        length = int(self.headers.get("Content-Length") or 0)
+        try:
+            length = int(self.headers.get("Content-Length") or 0)
+        except ValueError:
+            length = -1
         if not 0 <= length <= MAX_BODY:
-            raise ParameterError(f"The request is larger than {MAX_BODY} bytes.")
+            raise ParameterError(f"The request's Content-Length must be a number of bytes up to {MAX_BODY}.")
         raw = self.rfile.read(length) if length else b"null"
         try:
             return json.loads(raw)
@@ -506,6 +512,10 @@ class PickServer(ThreadingHTTPServer):
         self.closed = threading.Event()
         self.close_grace = CLOSE_GRACE
         self._last = time.monotonic()
+
+    def handle_error(self, request, client_address) -> None:
+        """A request that broke off (the page closed while an answer was sent): nothing to print."""
+        return
 
     def touch(self) -> None:
         """A request came: a close asked for before it is called off."""

@@ -568,7 +568,8 @@ class Picker:
     """A picker served from a background thread, for notebooks (:meth:`meshcorr.Correspondence.pick`).
 
     Displays the page in an ``<iframe>`` in Jupyter; :attr:`landmarks` holds the pairs as the page
-    last sent them, :attr:`mapping` the map of the last "Match again".
+    last sent them, :attr:`mapping` the map of the last "Match again". The frame loads from
+    127.0.0.1: the browser must run on the kernel's machine, or reach it through a forwarded port.
 
     Parameters
     ----------

@@ -129,3 +129,19 @@ def test_closing_the_page_stops_the_server(files):
     finally:
         process.kill()
     assert "nothing was saved" in process.stderr.read()
+
+
+def test_match_names_the_picker_with_its_files_when_the_choice_is_unsure(files, capsys, monkeypatch):
+    import meshcorr
+    from meshcorr.cli import match as match_command
+
+    result = meshcorr.match(str(files / "a.off"), str(files / "b.off"))
+    result.confidence = {"low": True, "margin": 0.01, "rival": "extremities-0", "suggested_landmarks": []}
+    monkeypatch.setattr(match_command, "_match", lambda args, landmarks: result)
+    out = files / "unsure map.txt"
+    assert main(["match", str(files / "a.off"), str(files / "b.off"), "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert f"meshcorr pick {files / 'a.off'} {files / 'b.off'} --map '{out}' -o landmarks.txt" in err
+    result.confidence = {"low": False, "margin": 1.0, "rival": None, "suggested_landmarks": []}
+    assert main(["match", str(files / "a.off"), str(files / "b.off"), "-o", str(out)]) == 0
+    assert "meshcorr pick" not in capsys.readouterr().err

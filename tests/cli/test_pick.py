@@ -145,3 +145,25 @@ def test_match_names_the_picker_with_its_files_when_the_choice_is_unsure(files, 
     result.confidence = {"low": False, "margin": 1.0, "rival": None, "suggested_landmarks": []}
     assert main(["match", str(files / "a.off"), str(files / "b.off"), "-o", str(out)]) == 0
     assert "meshcorr pick" not in capsys.readouterr().err
+
+
+def test_a_browser_that_cannot_start_is_said(files, capsys, monkeypatch):
+    import webbrowser
+
+    import meshcorr.viz.pick as pick_module
+
+    class Server:  # serves nothing: returns at once, as after a closed page
+        url = "http://127.0.0.1:1/?token=t"
+
+        def serve_forever(self, poll_interval):
+            pass
+
+        def server_close(self):
+            pass
+
+    monkeypatch.setattr(pick_module, "start_server", lambda session, port: Server())
+    monkeypatch.setattr(webbrowser, "open", lambda url: False)
+    assert main(["pick", str(files / "a.off"), str(files / "b.off"), "-o", str(files / "out.txt")]) == 0
+    err = capsys.readouterr().err
+    assert "picker is at http://127.0.0.1:1/?token=t" in err and "no browser could be started" in err
+    assert "nothing was saved" in err and not (files / "out.txt").exists()

@@ -49,6 +49,7 @@ def test_a_close_rival_is_low_confidence_and_named_in_the_message():
     assert report["low"] and report["rival"] == "extremities-0" and report["margin"] == pytest.approx(LOW_MARGIN / 2, abs=1e-4)
     message = unsure_message(report)
     assert "'extremities-0'" in message and "--landmarks" in message
+    assert "meshcorr pick SOURCE TARGET --map MAP -o LANDMARKS.txt" in message and "result.pick()" in message
     assert str(report["suggested_landmarks"][0]["source"]) in message
 
 

@@ -140,14 +140,15 @@ def unsure_message(report: dict) -> str:
     """The warning of an unsure choice, from ``result.confidence`` (:meth:`Confidence.to_dict`, input numbering,
     with ``cycle_error`` when the pair was also matched the other way round)."""
     rows = report["suggested_landmarks"]
+    pick = "meshcorr pick SOURCE TARGET --map MAP -o LANDMARKS.txt (in Python: result.pick())"
     cycle = report.get("cycle_error")
     if cycle is not None and (not (report["margin"] is not None and report["margin"] < LOW_MARGIN) or not rows):
         where = ("" if not rows else " They disagree with the best other map most at source vertices "
                  + ", ".join(str(row["source"]) for row in rows) + ".")
         return (f"The global choice of the map is unsure: the map back from the target disagrees with it (a round "
                 f"trip moves source vertices by {cycle:.2f} of sqrt(area) on average): one of the two is turned "
-                f"front to back, mirrored or has limbs exchanged.{where} Look at the map (meshcorr show), then "
-                "settle it with a few landmarks: landmarks=[(source, target), ...] or --landmarks FILE, one "
+                f"front to back, mirrored or has limbs exchanged.{where} Look at the map and click a few "
+                f"landmarks on it: {pick}; then landmarks=[(source, target), ...] or --landmarks FILE, one "
                 "'source target' pair a line.")
     sources = ", ".join(str(row["source"]) for row in rows)
     chosen = ", ".join(str(row["chosen"]) for row in rows)
@@ -156,5 +157,5 @@ def unsure_message(report: dict) -> str:
             f"a mirror image, a front/back turn or limbs exchanged) scores within {report['margin']:.2f} "
             f"decades of the chosen one (below {LOW_MARGIN} is unsure). They disagree most at source vertices "
             f"{sources}, which the chosen map sends to target vertices {chosen} and the other to {rival}. "
-            "Look at the map (meshcorr show), then settle it with landmarks on those vertices: "
+            f"Look at the map and click landmarks on those vertices: {pick}; then "
             "landmarks=[(source, target), ...] or --landmarks FILE, one 'source target' pair a line.")

@@ -23,6 +23,7 @@ from . import embed as _embed
 from . import evaluate as _evaluate
 from . import maps as _maps
 from . import match as _match
+from . import pick as _pick
 from . import show as _show
 from . import transfer as _transfer
 from ._signals import interrupt_once
@@ -31,7 +32,7 @@ from .exits import (EXIT_BROKEN_PIPE, EXIT_CODES, EXIT_ERROR, EXIT_FAILED_RUNS, 
                     exit_code)
 
 #: Sub-command modules, in the order ``--help`` lists them.
-COMMANDS = [_match, _evaluate, _bench, _show, _transfer, _maps, _embed, _batch, _cache]
+COMMANDS = [_match, _evaluate, _bench, _show, _pick, _transfer, _maps, _embed, _batch, _cache]
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -278,6 +278,12 @@ def run(args) -> int:
         if where:
             print(f"meshcorr: wrote {where}: {summary['n_mapped']} source vertices mapped; they land on "
                   f"{summary['n_target_hit']} distinct target vertices ({total:.1f} s)", file=sys.stderr)
+        if (result.confidence or {}).get("low") and args.output not in (None, "-"):
+            import shlex
+
+            print("meshcorr: to settle the choice, click a few landmarks on the map: meshcorr pick "
+                  + " ".join(shlex.quote(str(a)) for a in (args.source, args.target, "--map", args.output))
+                  + " -o landmarks.txt", file=sys.stderr)
         closed = result.params.get("holes_closed")
         if closed:
             print(f"meshcorr: closed {closed['source']} hole(s) of SOURCE and {closed['target']} of TARGET "

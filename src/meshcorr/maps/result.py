@@ -24,6 +24,10 @@ from ..core.mesh import Mesh
 from ..stages.reorder import Configuration
 from ..core.geodesics import DEFAULT_GEODESIC
 
+#: The ``match`` function "Match again" of :meth:`Correspondence.pick` runs; :mod:`meshcorr.pipeline.run` sets
+#: it to :func:`meshcorr.match` when it loads (``maps`` is below ``pipeline`` and may not import it).
+RERUN = None
+
 #: Array attributes written by :meth:`Correspondence.save`.
 _ARRAYS = ("map", "cost", "source_vertices", "target_vertices", "source_embedding", "target_embedding",
            "aligned_target_embedding", "anchors", "alternative_map", "matched_region")
@@ -464,6 +468,46 @@ class Correspondence:
 
         src, tgt = self._meshes("show")
         return show(src, tgt, self.local_map(), **options)
+
+    def pick(self, output: str | os.PathLike | None = None, *, port: int = 0, **options):
+        """Click landmark pairs on both meshes in the browser, and match again with them.
+
+        The picker of ``meshcorr pick`` (:mod:`meshcorr.viz.pick`), served
+        from a background thread on 127.0.0.1 and shown in a frame in a
+        notebook (or open ``picker.url``); it starts from this map and its
+        suggested landmarks (``confidence``). "Match again" runs
+        :func:`meshcorr.match` on these meshes with the pairs and ``options``
+        (offered once :mod:`meshcorr.pipeline.run` is loaded: ``meshcorr.match``
+        made this result or was used since).
+
+        Parameters
+        ----------
+        output : path, optional
+            The landmark file "Save" writes; None: the pairs stay in ``picker.landmarks``.
+        port : int
+            0: a free port.
+        **options
+            Options of :func:`meshcorr.match` for "Match again".
+
+        Returns
+        -------
+        picker : meshcorr.viz.pick.Picker
+            ``picker.landmarks`` ``(L, 2)`` int, input numbering (``landmarks=`` of
+            :func:`meshcorr.match`); ``picker.mapping`` the latest map; ``picker.close()``.
+        """
+        from ..viz.pick import Picker, PickSession
+
+        src, tgt = self._meshes("pick")
+        rerun = RERUN
+
+        def matcher(pairs, progress):
+            result = rerun(src, tgt, landmarks=pairs.tolist() if len(pairs) else None, progress=progress, **options)
+            return result.local_map(), result.confidence
+
+        session = PickSession((src.vertices, src.faces), (tgt.vertices, tgt.faces), mapping=self.local_map(),
+                              output=output, matcher=None if rerun is None else matcher, confidence=self.confidence,
+                              source_ids=src.kept, target_ids=tgt.kept)
+        return Picker(session, port=port)
 
     # ------------------------------------------------------------------ files
 

@@ -39,6 +39,7 @@ from ..core.coarse import CoarseCopy, coarse_copy, needs_copy
 from ..core.holes import restrict
 from ..core.mesh import Mesh, MeshLike
 from ..errors import MeshWarning, ParameterError, PartialShapeWarning, UnsureChoiceWarning
+from ..maps import result as result_module
 from ..maps.result import Correspondence
 from ..runtime.progress import run_progress
 from ..runtime.timing import StageProgress, StageTimer
@@ -523,3 +524,7 @@ def _chosen_first(configurations: list[Configuration], chosen: ConfigurationCand
     """The ranked configurations with the chosen one first and the alternative second."""
     head = [chosen.configuration] + ([other.configuration] if other is not None else [])
     return head + [c for c in configurations if all(c is not h for h in head)]
+
+
+# "Match again" of Correspondence.pick() runs match through this hook (maps may not import pipeline).
+result_module.RERUN = match

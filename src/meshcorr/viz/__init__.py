@@ -10,6 +10,9 @@
   numpy only, its viewer is inline JavaScript.
 - :mod:`meshcorr.viz.notebook` -- :func:`show`: both meshes side by side in
   a notebook (``pip install meshcorr[notebook]``, plotly).
+- :mod:`meshcorr.viz.pick` -- the landmark picker: a local server and a page
+  (the report's viewer) to click landmark pairs, save them and match again
+  (``meshcorr pick``, ``result.pick()``); standard library only.
 
 ``import meshcorr`` imports this package but none of its submodules (they
 load matplotlib or plotly on first use); :func:`show` imports its own.

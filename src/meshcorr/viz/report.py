@@ -1,11 +1,12 @@
 """A self-contained interactive HTML report of one correspondence (numpy only).
 
 The page holds everything it needs: the meshes, their colours and the
-viewer (``report_viewer.js``, a few hundred lines of plain JavaScript,
+viewer (``viewer.js``, a few hundred lines of plain JavaScript shared with
+the landmark picker of :mod:`meshcorr.viz.pick`, and ``report_viewer.js``,
 inlined), so it opens offline in any browser. The source and target are
 drawn side by side in two 2-D canvases (orthographic projection, faces
-sorted back to front, two-sided Lambert shading; a point cloud as dots) that share one rotation:
-dragging either view turns both. The target is coloured by part and the
+sorted back to front, two-sided Lambert shading; a point cloud as dots) that share one rotation
+and zoom: dragging either view turns both, the mouse wheel zooms both. The target is coloured by part and the
 source through the map, as in :func:`meshcorr.viz.figures.correspondence_figure`
 (Jain & Zhang 2006, Figures 7-8). Below the views: the stage timings, the
 chosen eigenvector configuration and its runner-up, and, with ground truth,
@@ -35,7 +36,7 @@ from ..maps.transfer import check_map, pull_back
 from ..maps.colors import UNMAPPED_COLOR, mesh_coloring
 from .render import camera_frame
 
-__all__ = ["report_html", "write_report"]
+__all__ = ["mesh_payload", "report_html", "viewer_script", "write_report"]
 
 _STYLE = """
 body { font-family: system-ui, sans-serif; margin: 1.2em; color: #222; }
@@ -51,7 +52,18 @@ th { background: #f0f0f0; } td.l, th.l { text-align: left; }
 """
 
 
-def _mesh_payload(vertices, faces, colors, max_faces: int) -> tuple[dict, int]:
+def viewer_script(page: str) -> str:
+    """The shared viewer (``viewer.js``) followed by one page's script (``report_viewer.js``,
+    ``pick_page.js``), as the text of one inline ``<script>``.
+
+    Both pages draw with the same code; "</" is escaped so that no text ends the element early.
+    """
+    folder = resources.files(__package__)
+    text = "\n".join(folder.joinpath(name).read_text(encoding="utf-8") for name in ("viewer.js", page))
+    return text.replace("</", "<\\/")
+
+
+def mesh_payload(vertices, faces, colors, max_faces: int) -> tuple[dict, int]:
     """Flat, rounded arrays for the viewer; every ``step``-th face when there are too many."""
     faces = np.asarray(faces, dtype=np.int64)
     step = max(1, -(-len(faces) // max_faces))
@@ -144,13 +156,13 @@ def report_html(source, target, mapping, summary: dict, *, errors=None, coloring
     mapping = check_map(mapping, len(V1), len(V2))
     target_colors = mesh_coloring(coloring, V2, F2)
     source_colors = pull_back(target_colors, mapping, fill=UNMAPPED_COLOR)
-    src, step1 = _mesh_payload(V1, F1, source_colors, max_faces)
-    tgt, step2 = _mesh_payload(V2, F2, target_colors, max_faces)
+    src, step1 = mesh_payload(V1, F1, source_colors, max_faces)
+    tgt, step2 = mesh_payload(V2, F2, target_colors, max_faces)
     data = {"source": src, "target": tgt,
             "camera": camera_frame(elev, azim, up).ravel().round(12).tolist()}
     # "</" inside a script element would end it early.
     data_json = json.dumps(data, separators=(",", ":")).replace("</", "<\\/")
-    viewer = resources.files(__package__).joinpath("report_viewer.js").read_text(encoding="utf-8")
+    viewer = viewer_script("report_viewer.js")
 
     parts = [f"<h1>{html.escape(title)}</h1>",
              '<pre id="errors"></pre>',

@@ -176,11 +176,11 @@ def test_suggested_landmarks_are_marked_and_named(picker):
     assert page.evaluate("meshcorrPick.state.suggestions") == confidence["suggested_landmarks"]
     assert page.get_attribute("#match", "disabled") == ""  # no matcher: no "Match again"
     page.close(run_before_unload=True)  # closing the page ends the server
-    assert server.closed.wait(5) and errors == []
+    assert server.closed.wait(30) and errors == []
     server.server_close()
 
 
 def test_close_ends_the_server(picker):
     page, _, server, _, _ = picker
     page.click("#close")
-    assert server.closed.wait(5)
+    assert server.closed.wait(30)

@@ -24,8 +24,9 @@ The model is a conditional logit over a pair's eligible candidates
 with :math:`D` the metric distortion, :math:`C` the curvature disagreement and
 :math:`R` the area fractions that the map reverses before and after the smooth
 shells; the weights maximise the likelihood of the candidate of least error in
-each pair of half ``a``. The library's rule before this study is
-:math:`w = (1, 3, 1, 1)`.
+each pair of half ``a``. The library's rule is :math:`w = \\tau (1, 3, 1, 1)`;
+``fit`` also gives the scale :math:`\\tau` of most likelihood for those
+proportions (:data:`meshcorr.choice.selection.EVIDENCE_SCALE`).
 
 Usage::
 
@@ -99,10 +100,12 @@ def collect_pair(pair, half: str) -> list[dict]:
     return rows
 
 
-def collect(out: Path, quick: bool, per_set: int) -> None:
+def collect(out: Path, quick: bool, per_set: int, sets: list[str] | None = None) -> None:
     done = {(r["set"], r["source"], r["target"]) for r in previous_rows(out)}
     with appending(out, FIELDS) as (handle, writer):
         for name, pairs in build_sets(quick).items():
+            if sets and name not in sets:
+                continue
             spread = {id(p) for p in _spread(pairs, per_set)}
             for index, pair in enumerate(pairs):  # the half of the pair's place in the whole set
                 if (name, pair.source_name, pair.target_name) in done or id(pair) not in spread:
@@ -116,11 +119,18 @@ def collect(out: Path, quick: bool, per_set: int) -> None:
                       f"{time.perf_counter() - start:.1f} s", file=sys.stderr, flush=True)
 
 
-def features(row: dict) -> np.ndarray:
-    """The logarithms of the energy's terms (reversed areas floored at REVERSED_FLOOR)."""
+#: The terms a model may use: the energy's four, and the smooth shells' own energies (their alignment
+#: left, the extrinsic part of it, the deformation).
+EXTRA_TERMS = ("alignment", "extrinsic", "deformation")
+
+
+def features(row: dict, extra: tuple[str, ...] = ()) -> np.ndarray:
+    """The logarithms of the energy's terms (reversed areas floored at REVERSED_FLOOR), then of ``extra``."""
     before = row["before"] if np.isfinite(row["before"]) else row["orientation"]
-    return np.log([row["distortion"], row["curvature"], max(1 - before, REVERSED_FLOOR),
-                   max(1 - row["orientation"], REVERSED_FLOOR)])
+    values = [row["distortion"], row["curvature"], max(1 - before, REVERSED_FLOOR),
+              max(1 - row["orientation"], REVERSED_FLOOR)]
+    values += [row[name] if np.isfinite(row[name]) and row[name] > 0 else 1.0 for name in extra]
+    return np.log(values)
 
 
 def load(out: Path) -> dict:
@@ -135,12 +145,12 @@ def load(out: Path) -> dict:
     return pairs
 
 
-def pick(rows: list[dict], weights: np.ndarray) -> dict:
+def pick(rows: list[dict], weights: np.ndarray, extra: tuple[str, ...] = ()) -> dict:
     pool = [r for r in rows if r["eligible"]]
-    return min(pool, key=lambda r: float(features(r) @ weights))
+    return min(pool, key=lambda r: float(features(r, extra) @ weights))
 
 
-def fit(pairs: dict) -> np.ndarray:
+def fit(pairs: dict, extra: tuple[str, ...] = ()) -> np.ndarray:
     """Weights of least negative log-likelihood of the best candidate of each pair of half a."""
     from scipy.optimize import minimize
 
@@ -149,7 +159,7 @@ def fit(pairs: dict) -> np.ndarray:
         pool = [r for r in rows if r["eligible"]]
         if half != "a" or len(pool) < 2:
             continue
-        X = np.array([features(r) for r in pool])
+        X = np.array([features(r, extra) for r in pool])
         best = int(np.argmin([r["mean_error"] for r in pool]))
         groups.append((X, best))
 
@@ -160,7 +170,29 @@ def fit(pairs: dict) -> np.ndarray:
             total -= e[best] - (np.log(np.sum(np.exp(e - e.max()))) + e.max())
         return total + 1e-3 * float(w @ w)
 
-    return minimize(loss, LIBRARY, method="Nelder-Mead", options={"maxiter": 4000, "xatol": 1e-4}).x
+    start = np.concatenate([LIBRARY, np.zeros(len(extra))])
+    return minimize(loss, start, method="Nelder-Mead", options={"maxiter": 8000, "xatol": 1e-4}).x
+
+
+def fit_scale(pairs: dict, half: str = "a") -> float:
+    """The scale tau of the library's weights of most likelihood of each pair's best candidate (``half``)."""
+    from scipy.optimize import minimize_scalar
+
+    groups = []
+    for (_, pair_half, _, _), rows in pairs.items():
+        pool = [r for r in rows if r["eligible"]]
+        if pair_half == half and len(pool) >= 2:
+            groups.append((np.array([features(r) for r in pool]) @ LIBRARY,
+                           int(np.argmin([r["mean_error"] for r in pool]))))
+
+    def loss(tau):
+        total = 0.0
+        for x, best in groups:
+            e = -tau * x
+            total -= e[best] - (np.log(np.sum(np.exp(e - e.max()))) + e.max())
+        return total
+
+    return float(minimize_scalar(loss, bounds=(0.01, 20.0), method="bounded").x)
 
 
 def report(pairs: dict, rules: dict) -> str:
@@ -168,10 +200,10 @@ def report(pairs: dict, rules: dict) -> str:
     lines = []
     for half in "ab":
         lines += [f"\nHalf {half}:\n", "| rule | " + " | ".join(sets) + " |", "|---|" + "---|" * len(sets)]
-        for name, weights in rules.items():
+        for name, (weights, extra) in rules.items():
             cells = []
             for s in sets:
-                picked = [pick(rows, weights) if weights is not None else min(rows, key=lambda r: r["mean_error"])
+                picked = [pick(rows, weights, extra) if weights is not None else min(rows, key=lambda r: r["mean_error"])
                           for k, rows in pairs.items() if k[0] == s and k[1] == half]
                 cells.append(f"{np.mean([r['mean_error'] for r in picked]):.4f} ({len(picked)}, "
                              f"{sum(r['flipped'] for r in picked)} flips)")
@@ -184,6 +216,7 @@ def main(argv=None) -> int:
     parser.add_argument("step", choices=("collect", "fit"))
     parser.add_argument("--out", type=Path, default=Path("benchmarks/cache/choice-weights.csv"))
     parser.add_argument("--quick", action="store_true", help="at most 8 pairs per set")
+    parser.add_argument("--sets", nargs="+", default=None, help="collect: only these sets")
     parser.add_argument("--per-set", type=int, default=0,
                         help="collect: this many pairs of each set, spread evenly (0: all)")
     args = parser.parse_args(argv)
@@ -191,13 +224,18 @@ def main(argv=None) -> int:
         print(f"choice_weights: {DATA} is absent; this benchmark needs ../shared/data. Skipping.", file=sys.stderr)
         return 0
     if args.step == "collect":
-        collect(args.out, args.quick, args.per_set)
+        collect(args.out, args.quick, args.per_set, args.sets)
         return 0
     pairs = load(args.out)
     weights = fit(pairs)
+    wider = fit(pairs, EXTRA_TERMS)
+    print(f"the library's weights (1, 3, 1, 1) x tau: tau = {fit_scale(pairs):.2f} on half a, "
+          f"{fit_scale(pairs, 'b'):.2f} on half b")
     print(f"fitted weights (log D, log C, log R before, log R after): {np.round(weights, 3).tolist()}")
-    print(report(pairs, {"library (1, 3, 1, 1)": LIBRARY, "fitted on half a": weights,
-                         "distortion only": np.array([1.0, 0, 0, 0]), "oracle": None}))
+    print(f"with the shells' energies ({', '.join(EXTRA_TERMS)}): {np.round(wider, 3).tolist()}")
+    print(report(pairs, {"library (1, 3, 1, 1)": (LIBRARY, ()), "fitted on half a": (weights, ()),
+                         "fitted, with the shells' energies": (wider, EXTRA_TERMS),
+                         "distortion only": (np.array([1.0, 0, 0, 0]), ()), "oracle": (None, ())}))
     return 0
 
 

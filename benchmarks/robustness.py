@@ -58,7 +58,7 @@ from tosca_symmetry import pyfm_map  # the same pyFM settings as the other bench
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 FIELDS = ["set", "source", "target", "method", "mean_error", "forgiven_error", "flipped", "partial",
-          "seconds", "n_points", "margin"]
+          "seconds", "n_points", "margin", "probability"]
 N_TRUTH_LANDMARKS = 5
 
 
@@ -188,12 +188,13 @@ def run_pair(pair: Pair, methods: list[str], options: dict | None = None) -> lis
                 extra["oriented_starts"] = True
             result = meshcorr.match(source, target, **extra)
             mapping, confidence = result.map, result.confidence or {}
-            margin = confidence.get("margin")
+            margin, probability = confidence.get("margin"), confidence.get("probability")
         else:
-            mapping, margin = pyfm_map(source, target, landmarks), None
+            mapping, margin, probability = pyfm_map(source, target, landmarks), None, None
         seconds = time.perf_counter() - start
         rows.append(dict(set=pair.set, source=pair.source_name, target=pair.target_name, method=method,
                          seconds=round(seconds, 3), margin="" if margin is None else margin,
+                         probability="" if probability is None else probability,
                          **score(pair, target, mapping, cache)))
     return rows
 

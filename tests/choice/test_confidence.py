@@ -23,13 +23,17 @@ def _candidates():
             MapCandidate("extremities-0", reversed_)]
 
 
-def test_margin_is_the_energy_ratio_to_the_best_rival_in_decades():
+def test_margin_is_the_log_probability_ratio_to_the_best_rival_and_the_probability_sums_the_configuration():
     chosen, near, rival = _candidates()
-    energies = {id(chosen): 1e-3, id(near): 2e-3, id(rival): 1e-1}
+    energies = {id(chosen): -3.0, id(near): -2.0, id(rival): -1.0}  # minus log-probabilities, up to a constant
     result = choice_confidence([chosen, near, rival], chosen, energies, _line_geodesics, _line_geodesics,
                                np.arange(0, N, 3))
     assert result.rival == "extremities-0"  # the near-copy, though of lower energy, is no rival
     assert result.margin == pytest.approx(2.0)
+    # The chosen configuration: the chosen map and its near-copy, against the rival.
+    weights = np.exp([3.0, 2.0, 1.0])
+    assert result.probability == pytest.approx(weights[:2].sum() / weights.sum())
+    assert result.to_dict()["probability"] == pytest.approx(result.probability, abs=1e-4)
     assert not result.low
     # the suggestions: where the two maps disagree most (the path's ends), spread apart
     sources = result.suggestions[:, 0]
@@ -41,7 +45,7 @@ def test_margin_is_the_energy_ratio_to_the_best_rival_in_decades():
 
 def test_a_close_rival_is_low_confidence_and_named_in_the_message():
     chosen, near, rival = _candidates()
-    energies = {id(chosen): 1e-3, id(near): 2e-3, id(rival): 1e-3 * 10 ** (LOW_MARGIN / 2)}
+    energies = {id(chosen): -3.0, id(near): -2.0, id(rival): -3.0 + LOW_MARGIN / 2}
     result = choice_confidence([chosen, near, rival], chosen, energies, _line_geodesics, _line_geodesics,
                                np.arange(0, N, 3))
     assert result.margin < LOW_MARGIN and result.low
@@ -49,21 +53,22 @@ def test_a_close_rival_is_low_confidence_and_named_in_the_message():
     assert report["low"] and report["rival"] == "extremities-0" and report["margin"] == pytest.approx(LOW_MARGIN / 2, abs=1e-4)
     message = unsure_message(report)
     assert "'extremities-0'" in message and "--landmarks" in message
+    assert f"probability is {report['probability']:.2f}" in message
     assert "meshcorr pick SOURCE TARGET --map MAP -o LANDMARKS.txt" in message and "result.pick()" in message
     assert str(report["suggested_landmarks"][0]["source"]) in message
 
 
 def test_without_a_rival_the_margin_is_infinite():
     chosen, near, _ = _candidates()
-    energies = {id(chosen): 1e-3, id(near): 1e-6}
+    energies = {id(chosen): -3.0, id(near): -9.0}
     result = choice_confidence([chosen, near], chosen, energies, _line_geodesics, _line_geodesics, np.arange(N))
-    assert result.rival is None and result.margin == np.inf and not result.low
+    assert result.rival is None and result.margin == np.inf and not result.low and result.probability == 1.0
     assert result.suggestions.shape == (0, 3) and result.to_dict()["margin"] is None
 
 
 def test_rival_distance_decides_what_counts_as_another_configuration():
     chosen, _, _ = _candidates()
     shifted = MapCandidate("extremities-1", np.minimum(np.arange(N) + int(2 * RIVAL_DISTANCE * (N - 1)), N - 1))
-    energies = {id(chosen): 1e-3, id(shifted): 1e-3}
+    energies = {id(chosen): -3.0, id(shifted): -3.0}
     result = choice_confidence([chosen, shifted], chosen, energies, _line_geodesics, _line_geodesics, np.arange(N))
     assert result.rival == "extremities-1" and result.margin == pytest.approx(0.0)

@@ -174,7 +174,7 @@ def test_landmarks_settle_the_left_right_choice(person):
                 if c["landmarks_kept"] == max(d["landmarks_kept"] for d in result.map_candidates)
                 and c["orientation"] >= ORIENTATION_MIN]
     chosen = [c for c in result.map_candidates if c["chosen"]][0]
-    assert all(np.isfinite(c["energy"]) and c["energy"] > 0 for c in result.map_candidates)
+    assert all(np.isfinite(c["energy"]) for c in result.map_candidates)
     assert chosen["energy"] == min(c["energy"] for c in eligible)
 
 
@@ -292,8 +292,16 @@ def test_the_orientation_counts_in_the_energy_of_maps_the_shells_refined():
     # A ZoomOut map's score is noisy: it does not count there, nor without a reliable orientation.
     right, turned = candidate("right", 0.98, 0.036, 0.53), candidate("turned", 0.92, 0.035, 0.52)
     assert energy(turned, True) < energy(right, True)
-    assert energy(right, False) == right.distortion
-    assert energy(candidate("kept", 1.0, 0.1, 1.0, 1.0), True) > 0  # floored: a perfect score still compares
+    assert energy(right, False) == pytest.approx(selection.EVIDENCE_SCALE * np.log(right.distortion))
+    # Minus a log-probability: tau (log D + 3 log C + log R_before + log R_after), the reversed areas floored.
+    shelled = candidate("shelled", 0.9, 0.04, 0.5, 1.0)
+    assert energy(shelled, True) == pytest.approx(selection.EVIDENCE_SCALE * (
+        np.log(0.04) + 3 * np.log(0.5) + np.log(selection.REVERSED_FLOOR) + np.log(0.1)))
+    assert np.isfinite(energy(candidate("exact", 1.0, 0.0, 0.0, 1.0), True))  # floored: an exact map still compares
+    # Its probability among others: the softmax of minus the energies.
+    pool = [right, turned, shelled]
+    expected = np.exp([-energy(c, True) for c in pool])
+    np.testing.assert_allclose(selection.choice_probabilities(pool, True), expected / expected.sum())
 
 
 def test_a_map_with_swapped_legs_is_repaired_from_its_consistent_part(person):

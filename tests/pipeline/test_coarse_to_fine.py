@@ -46,7 +46,8 @@ def test_the_chosen_map_is_refined_on_every_vertex(results):
 def test_the_result_reports_the_confidence_in_the_input_numbering(pair, results, monkeypatch):
     coarse, direct = results
     for result in (coarse, direct):  # the creature's candidate maps hold no rival that the rules let compete
-        assert result.confidence == {"margin": None, "low": False, "rival": None, "suggested_landmarks": []}
+        assert result.confidence == {"margin": None, "probability": 1.0, "low": False, "rival": None,
+                                     "suggested_landmarks": []}
     monkeypatch.setattr(confidence, "RIVAL_DISTANCE", -1.0)  # now every other map that competes is a rival, even an equal one
     monkeypatch.setattr(selection, "SAME_MAP_DISTANCE", -1.0)  # and near-copies are not merged before the shells
     src, tgt, _ = pair

@@ -26,22 +26,18 @@ one that the following energies prefer:
   A person turned half a turn about the long axis (front to back and left
   to right) keeps the orientation and, a person being thin, nearly every
   distance, but sends a nose to the back of the head; its curvature
-  disagrees. The map kept is the one of least
-  :math:`\text{distortion} \times \text{curvature}^{3}` (a weighted sum of
-  the two energies' logarithms; the weight 3 was the best of 0-6 on the
-  development pairs, ``benchmarks/RESULTS-robustness-trials.md``, and the
-  orientation threshold the best of 0.5-0.65). Without a reliable
-  orientation the signed curvature is undefined and the distortion alone
-  decides. For a map refined by the smooth shells (:func:`shell_candidates`:
-  the pipeline judges the maps as it returns them) the energy is multiplied
-  by the area fractions on which the map reverses the orientation before
-  and after the shells, :math:`(1 - o_\text{ZoomOut})(1 - o_\text{shells})`
-  (each floored at :data:`REVERSED_FLOOR`). After the shells a right map
-  keeps the orientation almost everywhere, a map with a part mirrored does
-  not; but the shells also tidy a map turned front to back, whose ZoomOut
-  map showed it (TOSCA michael16 -> michael8: 0.83 and 0.93 for the right
-  map, 0.61 and 0.95 for the turned one). Without the shells (ZoomOut's maps
-  alone) the scores are too noisy for this factor, and it is left out.
+  disagrees.
+- **reversed areas**: for a map refined by the smooth shells
+  (:func:`shell_candidates`: the pipeline judges the maps as it returns
+  them), the area fractions on which it reverses the orientation before
+  and after the shells, :math:`1 - o_\\text{ZoomOut}` and
+  :math:`1 - o_\\text{shells}` (each floored at :data:`REVERSED_FLOOR`).
+  After the shells a right map keeps the orientation almost everywhere, a
+  map with a part mirrored does not; but the shells also tidy a map turned
+  front to back, whose ZoomOut map showed it (TOSCA michael16 -> michael8:
+  0.83 and 0.93 for the right map, 0.61 and 0.95 for the turned one).
+  ZoomOut's maps alone are too noisy for this term, and it is left out for
+  them.
 - **regional orientation** (:func:`meshcorr.core.map_orientation.regional_orientation`):
   the orientation score of the worst of 12 regions; reported, so that a
   partly mirrored result can be seen in ``--json``; a map whose worst region
@@ -55,6 +51,16 @@ one that the following energies prefer:
   (measured: a gorilla -> man pair whose mirrored map had the smaller mean).
   ``landmark_error``, the mean of those distances, is reported. Landmark
   vertices are then mapped exactly to their partners.
+
+The map kept is the most probable one: the one of least :func:`energy`,
+minus the log-probability that a candidate is the right map when each
+score is independent evidence whose strength grows with its logarithm,
+:math:`E = \\tau (\\log D + 3 \\log C + \\log R_\\text{before} + \\log R_\\text{after})`
+(the weight 3 was the best of 0-6 on the development pairs,
+``benchmarks/RESULTS-robustness-trials.md``, and the orientation threshold
+the best of 0.5-0.65; :math:`\\tau` calibrates the probabilities,
+:func:`choice_probabilities`). Without a reliable orientation the signed
+curvature is undefined and the distortion alone decides.
 
 Measured on TOSCA, TOSCA gorilla -> human and SHREC'07 pairs in
 ``benchmarks/RESULTS-robustness.md``.
@@ -80,6 +86,11 @@ N_DISTORTION_SOURCES = 24
 CURVATURE_POWER = 3
 #: Least area fraction of reversed orientation counted in the energy of a map refined by the shells.
 REVERSED_FLOOR = 1e-3
+#: The energy's scale tau: minus the log-probability of a map is tau x its log-scores (fitted on half a of
+#: benchmarks/choice_weights.py's pairs by the likelihood of each pair's best candidate; it changes no choice).
+EVIDENCE_SCALE = 1.9
+#: Scores below this count as this in the energy's logarithms (an exact map has no distortion).
+SCORE_FLOOR = 1e-12
 #: A landmark is kept by a map that sends it within this (normalised geodesic distance) of its partner.
 LANDMARK_RADIUS = 0.05
 #: Candidates whose images of the distortion's source vertices lie on average closer than this (normalised
@@ -272,26 +283,48 @@ def candidate_summaries(candidates: list[MapCandidate], chosen: MapCandidate,
     reliable orientation, whose orientation is at least :data:`ORIENTATION_MIN`),
     and whether it is the chosen map or the alternative.
     """
-    # Four significant digits: the energy spans many orders of magnitude (1e-12 to 1e-1).
-    return [dict(c.to_dict(), energy=float(f"{energy(c, reliable):.4g}"), chosen=c is chosen,
+    return [dict(c.to_dict(), energy=round(energy(c, reliable), 3), chosen=c is chosen,
                  alternative=c is alternative) for c in candidates]
 
 
 def energy(candidate: MapCandidate, reliable: bool) -> float:
-    """distortion x curvature^3, times the reversed areas before and after the shells for a map they refined.
+    """Minus the log-probability (up to a constant) that ``candidate`` is the right map, from its scores.
 
-    See the module docstring; ``extra["zoomout_orientation"]`` is the map's
-    orientation score before :func:`shell_candidates`.
+    .. math::
 
-    The distortion alone without a reliable orientation.
+        E = \\tau \\left(\\log D + 3 \\log C + \\log R_\\text{before} + \\log R_\\text{after}\\right),
+        \\qquad P(\\text{candidate } j \\text{ is right}) = e^{-E_j} / \\textstyle\\sum_i e^{-E_i},
+
+    with :math:`D` the metric distortion, :math:`C` the curvature
+    disagreement and, for a map refined by the smooth shells,
+    :math:`R = \\max(1 - o, 10^{-3})` the area fractions on which it
+    reverses the orientation before (``extra["zoomout_orientation"]``) and
+    after them (:data:`REVERSED_FLOOR`). Each score is treated as
+    independent evidence of a wrong map whose strength grows with its
+    logarithm: a map twice as distorted as another must have a curvature
+    disagreement :math:`2^{1/3}` times smaller to be as likely. The
+    exponents were chosen on development pairs (module docstring) and
+    :math:`\\tau` = :data:`EVIDENCE_SCALE` on half ``a`` of the sets of
+    ``benchmarks/choice_weights.py`` so that the probabilities
+    (:func:`choice_probabilities`) are calibrated; :math:`\\tau` changes no
+    choice. Without a reliable orientation, :math:`E = \\tau \\log D`.
+    Scores are floored at :data:`SCORE_FLOOR` (an exact map scores 0).
     """
-    if not reliable:
-        return candidate.distortion
-    value = candidate.distortion * candidate.curvature ** CURVATURE_POWER
-    if candidate.extra.get("shells"):
-        for orientation in (candidate.extra["zoomout_orientation"], candidate.orientation):
-            value *= max(1.0 - orientation, REVERSED_FLOOR)
-    return value
+    terms = [(1.0, candidate.distortion)]
+    if reliable:
+        terms.append((CURVATURE_POWER, candidate.curvature))
+        if candidate.extra.get("shells"):
+            for orientation in (candidate.extra["zoomout_orientation"], candidate.orientation):
+                terms.append((1.0, max(1.0 - orientation, REVERSED_FLOOR)))
+    return EVIDENCE_SCALE * sum(weight * float(np.log(max(value, SCORE_FLOOR))) if weight else 0.0
+                                for weight, value in terms)
+
+
+def choice_probabilities(candidates: list[MapCandidate], reliable: bool) -> np.ndarray:
+    """``(len(candidates),)`` the probability of each candidate being the right map: the softmax of -:func:`energy`."""
+    energies = -np.array([energy(c, reliable) for c in candidates])
+    weights = np.exp(energies - energies.max())
+    return weights / weights.sum()
 
 
 def distinct_candidates(candidates: list[MapCandidate], target_geodesics, sources: np.ndarray, *,

@@ -138,9 +138,11 @@ class Correspondence:
         landmarks).
     confidence : dict or None
         How sure the whole-map choice is (:mod:`meshcorr.choice.confidence`):
-        ``margin``, the decades of energy between the best map of a
-        different global configuration (the rival: a mirror, a front/back
-        turn, limbs exchanged) and the chosen map (None without a rival);
+        ``margin``, :math:`\\log P(\\text{chosen}) / P(\\text{rival})`, how much more
+        probable the chosen map is than the best map of a different global
+        configuration (the rival: a mirror, a front/back turn, limbs
+        exchanged; None without a rival); ``probability``, that the chosen
+        configuration is the right one among the candidates' (1 without a rival);
         ``low``, whether it is below the unsure threshold; ``rival``, that
         map's origin; ``suggested_landmarks``, a few ``{"source", "chosen",
         "rival"}`` vertices (input numbering) where the two maps disagree

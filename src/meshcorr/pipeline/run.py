@@ -126,7 +126,8 @@ def _reverse_checked(result: Correspondence, source, target, settings: Settings)
         reverse = match(target, source, settings.replace(check_reverse=False, landmarks=landmarks))
     error = cycle_error(result.source, result.map, reverse.map, geodesic=settings.geodesic,
                         random_state=settings.random_state)
-    report = dict(result.confidence or {"margin": None, "low": False, "rival": None, "suggested_landmarks": []})
+    report = dict(result.confidence or {"margin": None, "probability": 1.0, "low": False, "rival": None,
+                                        "suggested_landmarks": []})
     report.update(cycle_error=round(error, 4), low=bool(report["low"] or error > CYCLE_LIMIT))
     return report
 

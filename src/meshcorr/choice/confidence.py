@@ -56,7 +56,7 @@ RIVAL_DISTANCE = 0.1
 #: set of benchmarks/robustness.py (the most wrong maps flagged with at most 10 % of the right ones;
 #: benchmarks/confidence_threshold.py, benchmarks/RESULTS-robustness.md): 0.05 decades of the energy's
 #: former product form, 0.05 x ln(10) x EVIDENCE_SCALE in this unit (the same maps flagged).
-LOW_MARGIN = 0.22
+LOW_MARGIN = 0.23
 #: Landmarks suggested for an unsure choice.
 N_SUGGESTIONS = 3
 #: Least normalised geodesic distance between two suggested source vertices.

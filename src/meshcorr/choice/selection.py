@@ -88,7 +88,7 @@ CURVATURE_POWER = 3
 REVERSED_FLOOR = 1e-3
 #: The energy's scale tau: minus the log-probability of a map is tau x its log-scores (fitted on half a of
 #: benchmarks/choice_weights.py's pairs by the likelihood of each pair's best candidate; it changes no choice).
-EVIDENCE_SCALE = 1.9
+EVIDENCE_SCALE = 2.0
 #: Scores below this count as this in the energy's logarithms (an exact map has no distortion).
 SCORE_FLOOR = 1e-12
 #: A landmark is kept by a map that sends it within this (normalised geodesic distance) of its partner.

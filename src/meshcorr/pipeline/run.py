@@ -35,11 +35,12 @@ from ..choice.confidence import unsure_message
 from ..choice.reverse_check import CYCLE_LIMIT, cycle_error
 from ..choice.symmetry import ConfigurationCandidate, choose, score_configurations
 from ..choice.whole_map import EXTREMITY_STARTS, WholeMapChoice, whole_map_choice
-from ..core.coarse import CoarseCopy, coarse_copy, needs_copy
+from ..core.coarse import CoarseCopy, coarse_copies, needs_copy
 from ..core.holes import restrict
 from ..core.mesh import Mesh, MeshLike
 from ..errors import MeshWarning, ParameterError, PartialShapeWarning, UnsureChoiceWarning
 from ..maps.result import Correspondence
+from ..runtime.memory import check_coarse_fits
 from ..runtime.progress import run_progress
 from ..runtime.timing import StageProgress, StageTimer
 from ..shapes.prepared import PreparedShape, as_meshes, pair_shapes, pair_spectrum
@@ -226,8 +227,10 @@ def _coarse_copies(src: Mesh, tgt: Mesh, settings: Settings, timer: StageTimer) 
     if (not settings.refine or settings.bijective or settings.symmetry != "auto" or src.is_cloud or tgt.is_cloud
             or not needs_copy(max(src.n_vertices, tgt.n_vertices), size)):
         return None
+    # Refused before any heavy work when the path would not fit the memory allowed.
+    check_coarse_fits(src.n_vertices, tgt.n_vertices, resolve_memory(settings.max_memory))
     with timer.stage("coarse"):
-        copies = coarse_copy(src, size), coarse_copy(tgt, size)
+        copies = tuple(coarse_copies([src, tgt], size))  # large meshes side by side, in child processes
     return None if None in copies else copies
 
 

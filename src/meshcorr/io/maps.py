@@ -51,7 +51,7 @@ def map_text(mapping) -> str:
 
 
 def map_bytes(mapping) -> bytes:
-    """``(n,)`` int -> the ASCII bytes of one integer a line, in one vectorised pass.
+    r"""``(n,)`` int -> the ASCII bytes of one integer a line, in one vectorised pass.
 
     Each value's decimal digits are the columns of an ``(n, w + 2)`` byte
     matrix (a sign column, ``w`` digit columns :math:`\lfloor |v| / 10^j

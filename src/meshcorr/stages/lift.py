@@ -59,8 +59,16 @@ from ..spectral.basis import basis_size, orthogonal_fit, pair_bases
 from .refine import REFINE_K, REFINED_MAP
 from .shells import NORMAL_WEIGHT, SPECTRAL_WEIGHT, DESCRIPTOR_WEIGHT
 
-__all__ = ["N_CANDIDATES", "extended_basis", "interpolation_matrix", "lift_to_fine"]
+__all__ = ["LIFT_ABOVE", "LIFT_K_FACTOR", "N_CANDIDATES", "local_nearest", "extended_basis", "interpolation_matrix", "lift_to_fine"]
 
+#: Vertices (of the larger mesh) above which the pipeline lifts the copies' map with this stage
+#: instead of refining it by ZoomOut and the shells on the meshes: those need the meshes' own bases
+#: and exact searches (at 80k vertices 60 s against 12 s here, the same marker error on the lion pair,
+#: 0.014), while far below it a copy 5x coarser than the mesh gave a 2x larger error (a 2000-vertex
+#: creature from 400-vertex copies, tests/pipeline/test_coarse_to_fine.py).
+LIFT_ABOVE = 50_000
+#: The lift's basis size, in multiples of the refinement's ``refine_k``.
+LIFT_K_FACTOR = 2
 #: Target vertices, nearest in coordinates and normals, among which each source vertex takes the
 #: nearest in the whole product space.
 N_CANDIDATES = 8

@@ -28,6 +28,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import MeshError
+from ..runtime.timing import peak_resident_mib
 from .mesh import Mesh, as_mesh
 
 __all__ = ["COARSE_ABOVE", "COARSE_VERTICES", "CoarseCopy", "coarse_copies", "coarse_copy", "needs_copy"]
@@ -121,7 +122,7 @@ def coarse_copy(mesh: Mesh, n_vertices: int = COARSE_VERTICES, *, above: float =
 
 
 def coarse_copies(meshes: list[Mesh], n_vertices: int = COARSE_VERTICES, *, above: float = COARSE_ABOVE,
-                  processes: bool | None = None) -> list[CoarseCopy | None]:
+                  processes: bool | None = None, memory: dict | None = None) -> list[CoarseCopy | None]:
     """:func:`coarse_copy` of each mesh, the large ones decimated side by side in child processes.
 
     libigl's ``decimate`` holds the interpreter for its whole run (~25 s at
@@ -139,6 +140,10 @@ def coarse_copies(meshes: list[Mesh], n_vertices: int = COARSE_VERTICES, *, abov
         As :func:`coarse_copy`.
     processes : bool, optional
         Force child processes on (True) or off (False).
+    memory : dict, optional
+        Filled with ``"children_mib"``: the sum of the child processes' peak
+        resident memory (an upper bound of what they added: pages shared with
+        this process count in each), 0 without children.
 
     Returns
     -------
@@ -161,7 +166,11 @@ def coarse_copies(meshes: list[Mesh], n_vertices: int = COARSE_VERTICES, *, abov
     if processes is None:
         processes = any(meshes[index].n_vertices > PROCESS_ABOVE for index in jobs)
     processes = processes and sys.platform != "win32" and "fork" in multiprocessing.get_all_start_methods()
-    results = _decimate_in_children(jobs) if processes else {index: _decimate(*job) for index, job in jobs.items()}
+    peaks: list[float] = []
+    results = (_decimate_in_children(jobs, peaks) if processes
+               else {index: _decimate(*job) for index, job in jobs.items()})
+    if memory is not None:
+        memory["children_mib"] = float(sum(peaks))
     for index, result in results.items():
         out[index] = None if result is None else _copy_of(meshes[index], *result, n_vertices)
     return out
@@ -182,13 +191,16 @@ def _decimate(vertices: np.ndarray, faces: np.ndarray, faces_wanted: int) -> tup
 def _child(connection, vertices: np.ndarray, faces: np.ndarray, faces_wanted: int) -> None:
     """A child process's work: :func:`_decimate`, sent back through ``connection``."""
     try:
-        connection.send(_decimate(vertices, faces, faces_wanted))
+        result = _decimate(vertices, faces, faces_wanted)
+        connection.send((result, peak_resident_mib() or 0.0))
     finally:
         connection.close()
 
 
-def _decimate_in_children(jobs: dict) -> dict:
-    """:func:`_decimate` of each job in its own forked process, all at once; Ctrl-C stops them."""
+def _decimate_in_children(jobs: dict, peaks: list) -> dict:
+    """:func:`_decimate` of each job in its own forked process, all at once; Ctrl-C stops them.
+
+    ``peaks`` gets each child's peak resident MiB."""
     context = multiprocessing.get_context("fork")
     running = {}
     results: dict = {}
@@ -205,7 +217,8 @@ def _decimate_in_children(jobs: dict) -> dict:
                 if not process.is_alive() and not receiver.poll():
                     break
             try:
-                results[index] = receiver.recv()
+                results[index], peak = receiver.recv()
+                peaks.append(peak)
             except EOFError:  # the child died without an answer (killed, out of memory)
                 results[index] = None
     finally:

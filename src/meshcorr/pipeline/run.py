@@ -229,8 +229,11 @@ def _coarse_copies(src: Mesh, tgt: Mesh, settings: Settings, timer: StageTimer) 
         return None
     # Refused before any heavy work when the path would not fit the memory allowed.
     check_coarse_fits(src.n_vertices, tgt.n_vertices, resolve_memory(settings.max_memory))
+    children: dict = {}
     with timer.stage("coarse"):
-        copies = tuple(coarse_copies([src, tgt], size))  # large meshes side by side, in child processes
+        copies = tuple(coarse_copies([src, tgt], size, memory=children))  # large meshes side by side, in children
+    if "coarse" in timer.memory:  # this process's peak and its children's (an upper bound)
+        timer.memory["coarse"] += children.get("children_mib", 0.0)
     return None if None in copies else copies
 
 

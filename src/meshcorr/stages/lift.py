@@ -57,7 +57,7 @@ from ..core.orientation import mesh_orientation, vertex_normals
 from ..runtime.checks import check_int, check_vertex_map
 from ..spectral.basis import basis_size, orthogonal_fit, pair_bases
 from .refine import REFINE_K, REFINED_MAP
-from .shells import NORMAL_WEIGHT, SPECTRAL_WEIGHT, DESCRIPTOR_WEIGHT
+from .shells import DESCRIPTOR_WEIGHT, NORMAL_WEIGHT, SPECTRAL_WEIGHT, rigid_motion as _rigid
 
 __all__ = ["LIFT_ABOVE", "LIFT_K_FACTOR", "N_CANDIDATES", "local_nearest", "extended_basis", "interpolation_matrix", "lift_to_fine"]
 
@@ -278,10 +278,3 @@ def _unit_fine(mesh: Mesh, faces: np.ndarray):
     centre, scale = mass @ vertices, np.sqrt(total)
     unit = lambda x: (np.asarray(x, dtype=np.float64) - centre) / scale  # noqa: E731
     return unit(vertices), mass, unit
-
-
-def _rigid(points: np.ndarray, onto: np.ndarray, weights: np.ndarray, side: float):
-    """The orthogonal motion of least weighted squared distance (Kabsch), as :mod:`meshcorr.stages.shells`'s."""
-    from .shells import _rigid as shells_rigid
-
-    return shells_rigid(points, onto, weights, side)

@@ -55,6 +55,7 @@ from ..core.map_orientation import orientation_score
 from ..core.mesh import Mesh
 from ..core.orientation import mesh_orientation, vertex_normals
 from ..runtime.checks import check_int, check_vertex_map
+from ..runtime.threads import kdtree_query
 from ..spectral.basis import basis_size, orthogonal_fit, pair_bases
 from .refine import REFINE_K, REFINED_MAP
 from .shells import DESCRIPTOR_WEIGHT, NORMAL_WEIGHT, SPECTRAL_WEIGHT, rigid_motion as _rigid
@@ -80,8 +81,8 @@ N_SAMPLE = 20_000
 SEARCH_DIMS = 30
 #: Relative error allowed to the KD-tree's candidates (scipy's ``eps``).
 SEARCH_EPS = 1.0
-#: Source vertices per KD-tree query (bounds its (block, N_CANDIDATES) results to ~16 MB).
-_QUERY_BLOCK = 1 << 16
+#: Rows per KD-tree query or nearest-point search: bounds the results' memory and the wait for a Ctrl-C.
+_QUERY_BLOCK = 1 << 15
 #: Source vertices ranked per block (bounds the (block, N_CANDIDATES, d) float32 temporary to ~25 MB).
 _BLOCK = 1 << 12
 
@@ -110,7 +111,10 @@ def interpolation_matrix(points: np.ndarray, coarse: Mesh) -> sp.csr_matrix:
     points = np.ascontiguousarray(points, dtype=np.float64)
     vertices = np.ascontiguousarray(coarse.vertices, dtype=np.float64)
     faces = np.ascontiguousarray(coarse.faces, dtype=np.int64)
-    _, face, closest = igl.point_mesh_squared_distance(points, vertices, faces)
+    face, closest = np.empty(len(points), dtype=np.int64), np.empty_like(points)
+    for start in range(0, len(points), _QUERY_BLOCK):  # blocks: libigl holds the interpreter (Ctrl-C)
+        rows = slice(start, start + _QUERY_BLOCK)
+        _, face[rows], closest[rows] = igl.point_mesh_squared_distance(points[rows], vertices, faces)
     corners = faces[face]  # (n, 3)
     weights = _barycentric(closest, vertices[corners[:, 0]], vertices[corners[:, 1]], vertices[corners[:, 2]])
     rows = np.repeat(np.arange(len(points)), 3)
@@ -258,7 +262,8 @@ def local_nearest(queries: np.ndarray, points: np.ndarray, n_candidates: int = N
     out = np.empty(len(queries), dtype=np.int64)
     for start in range(0, len(queries), _QUERY_BLOCK):
         block = queries[start:start + _QUERY_BLOCK]
-        _, candidates = tree.query(block[:, :search_dims], k=n_candidates, eps=eps, workers=-1)
+        # over the cores, and safe under Ctrl-C (meshcorr.runtime.threads.kdtree_query)
+        _, candidates = kdtree_query(tree, block[:, :search_dims], k=n_candidates, eps=eps)
         candidates = candidates.reshape(len(block), n_candidates)
         for first in range(0, len(block), _BLOCK):
             rows = candidates[first:first + _BLOCK]

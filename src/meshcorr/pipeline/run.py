@@ -26,6 +26,7 @@ spectral domain", Shape Modeling International 2006.
 from __future__ import annotations
 
 import warnings
+from contextlib import nullcontext
 from typing import NamedTuple
 
 import numpy as np
@@ -227,8 +228,10 @@ def _coarse_copies(src: Mesh, tgt: Mesh, settings: Settings, timer: StageTimer) 
     if (not settings.refine or settings.bijective or settings.symmetry != "auto" or src.is_cloud or tgt.is_cloud
             or not needs_copy(max(src.n_vertices, tgt.n_vertices), size)):
         return None
-    # Refused before any heavy work when the path would not fit the memory allowed.
-    check_coarse_fits(src.n_vertices, tgt.n_vertices, resolve_memory(settings.max_memory))
+    # Refused before any heavy work when the path would not fit the memory allowed; above LIFT_ABOVE
+    # vertices this check is the stage "large", which opens the large meshes' progress plan.
+    with timer.stage("large") if max(src.n_vertices, tgt.n_vertices) > LIFT_ABOVE else nullcontext():
+        check_coarse_fits(src.n_vertices, tgt.n_vertices, resolve_memory(settings.max_memory))
     children: dict = {}
     with timer.stage("coarse"):
         copies = tuple(coarse_copies([src, tgt], size, memory=children))  # large meshes side by side, in children
@@ -262,7 +265,8 @@ def _match_coarse_to_fine(src: Mesh, tgt: Mesh, copies: tuple[CoarseCopy, Coarse
             # The copies' own numbering (as CoarseCopy.lift_map takes it); bases of twice the
             # refinement's size (measured on the lion pair at 80k: marker error 0.0205 -> 0.0141).
             mapping = lift_to_fine(copies, np.asarray(coarse.map), k=LIFT_K_FACTOR * settings.refine_k,
-                                   landmarks=pairs, descriptors=described, random_state=settings.random_state)
+                                   landmarks=pairs, descriptors=described, random_state=settings.random_state,
+                                   progress=timer.reporter("lift"))
         return _lifted_result(src, tgt, copies, coarse, mapping, coarse.refine_history, settings, timer, None)
     with prefetch_bases(src, tgt, settings.refine_k, random_state=settings.random_state) as bases:
         coarse = _match_whole((copies[0].mesh, copies[1].mesh), coarse_pairs, coarse_settings, max_memory, timer,

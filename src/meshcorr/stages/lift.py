@@ -43,7 +43,7 @@ below, on the meshes.
 4. **Refits** (:data:`ITERATIONS`): the motion, the deformation and
    :math:`C` fitted again on :data:`N_SAMPLE` sampled fine vertices and
    their images under the new map (the bases there are rows of
-   :math:`P \Phi_c`), and step 3 repeated.
+   :math:`P \\Phi_c`), and step 3 repeated.
 
 Cost at ``n`` fine vertices: the AABB queries :math:`O(n \\log m)`, the
 KD-tree :math:`O(n \\log n)`, arrays of :math:`O(n K)`. The copies' bases
@@ -159,7 +159,8 @@ def lift_to_fine(copies: tuple[CoarseCopy, CoarseCopy], coarse_map: np.ndarray, 
                  landmarks: np.ndarray | None = None,
                  descriptors: tuple[np.ndarray, np.ndarray] | None = None,
                  n_candidates: int = N_CANDIDATES, iterations: int = ITERATIONS, n_sample: int = N_SAMPLE,
-                 search_dims: int = SEARCH_DIMS, eps: float = SEARCH_EPS, spectral_k: int | None = None, first_k: int | None = None, random_state: int | None = 0) -> np.ndarray:
+                 search_dims: int = SEARCH_DIMS, eps: float = SEARCH_EPS, spectral_k: int | None = None,
+                 first_k: int | None = None, random_state: int | None = 0, progress=None) -> np.ndarray:
     """The refined map of two coarse copies as a map between the fine meshes (module docstring).
 
     Parameters
@@ -179,8 +180,15 @@ def lift_to_fine(copies: tuple[CoarseCopy, CoarseCopy], coarse_map: np.ndarray, 
         space with the shells' weight.
     n_candidates : int
         Nearest target vertices in coordinates and normals ranked in the whole space.
+    search_dims, eps : int, float
+        Columns searched by the KD-tree, and its relative error allowed (:func:`local_nearest`).
+    spectral_k, first_k : int, optional
+        Spectral coordinates in the product space, and the deformation's basis size at the first
+        pass (rising to ``k`` at the last); both ``k`` by default.
     random_state : int or None
-        Seed of the bases' start vectors and of the orientation's sample.
+        Seed of the bases' start vectors, of the orientation's sample and of the refits' samples.
+    progress : callable, optional
+        ``progress(done, total)`` after each of the ``iterations + 1`` searches.
 
     Returns
     -------
@@ -218,7 +226,7 @@ def lift_to_fine(copies: tuple[CoarseCopy, CoarseCopy], coarse_map: np.ndarray, 
     fit = (x1c, x2c[coarse_map], mass, phi1c, phi2c[coarse_map])
     rng = np.random.default_rng(random_state)
     mapping = None
-    for size in np.linspace(min(first_k, k), k, iterations + 1).round().astype(int):
+    for step, size in enumerate(np.linspace(min(first_k, k), k, iterations + 1).round().astype(int)):
         p1, images, weights, basis, image_basis = fit
         rigid = _rigid(p1, images, weights, side)
         deformation = basis[:, :size].T @ (weights[:, None] * (images - rigid(p1)))  # (size, 3), in the basis
@@ -237,6 +245,8 @@ def lift_to_fine(copies: tuple[CoarseCopy, CoarseCopy], coarse_map: np.ndarray, 
         sample = np.sort(rng.choice(len(x1), size=min(n_sample, len(x1)), replace=False))
         images = mapping[sample]
         fit = (x1[sample], x2[images], m1[sample] / m1[sample].sum(), P1[sample] @ phi1c, P2[images] @ phi2c)
+        if progress is not None:
+            progress(step + 1, iterations + 1)
     return mapping
 
 

@@ -96,12 +96,36 @@ def errors(target: Path, map_file: Path, markers: np.ndarray) -> tuple[float, fl
     return float(distance[markers].mean()), float(distance.mean())
 
 
+def interrupt_latency(a: Path, b: Path, delays: list[float], max_memory: str) -> list[tuple[float, float, int]]:
+    """Ctrl-C (SIGINT) sent to fresh ``meshcorr match`` runs after each delay: (delay, seconds to exit, exit code)."""
+    import signal
+    import time
+
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        for delay in delays:
+            argv = [sys.executable, "-m", "meshcorr", "match", str(a), str(b), "-o", str(Path(folder) / "m.txt"),
+                    "-q", "--max-memory", max_memory]
+            process = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+            time.sleep(delay)
+            sent = time.perf_counter()
+            process.send_signal(signal.SIGINT)
+            code = process.wait()
+            rows.append((delay, time.perf_counter() - sent, code))
+            print(f"million: Ctrl-C at {delay:.0f} s: exit {code} after {rows[-1][1]:.2f} s", file=sys.stderr,
+                  flush=True)
+    return rows
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--sizes", nargs="+", default=["5k", "80k", "320k", "1.28M"], choices=list(LEVELS))
     parser.add_argument("--data", type=Path, default=DATA)
     parser.add_argument("--max-memory", default="12G")
     parser.add_argument("--build-only", action="store_true", help="write the subdivided meshes and stop")
+    parser.add_argument("--interrupt", nargs="+", type=float, metavar="SECONDS",
+                        help="instead of the table: Ctrl-C the largest pair's run after each delay, "
+                             "report the seconds to its exit")
     parser.add_argument("extra", nargs="*", help="further options of meshcorr match (after --)")
     args = parser.parse_args(argv)
     if not (args.data / "sumner" / "lion-poses").is_dir():
@@ -111,6 +135,12 @@ def main(argv=None) -> int:
     markers = lion_markers(args.data)
     pairs = {size: build_pair(args.data, LEVELS[size]) for size in args.sizes}
     if args.build_only:
+        return 0
+    if args.interrupt:
+        size = args.sizes[-1]
+        print(f"| pair | Ctrl-C after s | exit code | seconds to exit |\n|---|---|---|---|")
+        for delay, seconds, code in interrupt_latency(*pairs[size], args.interrupt, args.max_memory):
+            print(f"| {size} | {delay:.0f} | {code} | {seconds:.2f} |")
         return 0
     rows = []
     with tempfile.TemporaryDirectory() as folder:

@@ -69,3 +69,12 @@ def test_copies_made_in_child_processes_are_those_made_here(creature):
     small, cloud = coarse_copies([creature, as_mesh(creature.vertices)], 600, processes=True)
     assert small.is_identity and cloud.is_identity  # 2000 <= 4 x 600: their own copies
     assert coarse_copies([as_mesh(creature.vertices)], 400, processes=True) == [None]  # a cloud has none
+
+
+def test_a_child_process_that_dies_gives_no_copy(creature, monkeypatch):
+    import os
+
+    from meshcorr.core import coarse
+
+    monkeypatch.setattr(coarse, "_decimate", lambda *args: os._exit(1))  # the forked child inherits it
+    assert coarse.coarse_copies([creature], 400, processes=True) == [None]

@@ -21,6 +21,7 @@ between two coarse copies becomes a map between the fine meshes by
 from __future__ import annotations
 
 import multiprocessing
+import signal
 import sys
 from dataclasses import dataclass
 
@@ -189,7 +190,13 @@ def _decimate(vertices: np.ndarray, faces: np.ndarray, faces_wanted: int) -> tup
 
 
 def _child(connection, vertices: np.ndarray, faces: np.ndarray, faces_wanted: int) -> None:
-    """A child process's work: :func:`_decimate`, sent back through ``connection``."""
+    """A child process's work: :func:`_decimate`, sent back through ``connection``.
+
+    The parent's Python signal handlers would run only once libigl returns: the child dies on SIGTERM
+    at once (the default action) and leaves Ctrl-C to the parent, which stops it.
+    """
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         result = _decimate(vertices, faces, faces_wanted)
         connection.send((result, peak_resident_mib() or 0.0))
@@ -224,7 +231,7 @@ def _decimate_in_children(jobs: dict, peaks: list) -> dict:
     finally:
         for process, receiver in running.values():
             if process.is_alive():
-                process.terminate()
+                process.kill()  # SIGKILL: nothing of the child's is worth keeping
             process.join()
             receiver.close()
     return results

@@ -8,10 +8,12 @@ time and memory linear in the vertex count: no Laplace-Beltrami
 eigenproblem, no matrix with a row per vertex wider than the product space
 below, on the meshes.
 
-1. **Extended bases** (in the spirit of Nasikun & Hildebrandt's fast
-   approximate eigenbases, "The Hierarchical Subspace Iteration Method for
-   Laplace-Beltrami Eigenproblems", ACM TOG 2022, which extend a coarse
-   basis by interpolation): each fine vertex :math:`f` is projected on the
+1. **Extended bases** (in the spirit of the fast approximate eigenbases of
+   Nasikun, Brandt & Hildebrandt, "Fast Approximation of Laplace-Beltrami
+   Eigenproblems", Computer Graphics Forum (SGP) 2018, which solve on a
+   reduced space of functions attached to a few vertices and extend the
+   result to all; here the reduced space is the coarse copy's
+   piecewise-linear functions): each fine vertex :math:`f` is projected on the
    nearest point of the coarse surface (libigl's AABB tree), and its
    barycentric weights in that coarse triangle form a sparse
    interpolation matrix :math:`P` ``(n, m)`` with three entries a row
@@ -66,12 +68,13 @@ from ..spectral.basis import basis_size, orthogonal_fit, pair_bases
 from .refine import REFINE_K, REFINED_MAP
 from .shells import DESCRIPTOR_WEIGHT, NORMAL_WEIGHT, SPECTRAL_WEIGHT, rigid_motion as _rigid
 
-__all__ = ["LIFT_ABOVE", "LIFT_K_FACTOR", "N_CANDIDATES", "local_nearest", "extended_basis", "interpolation_matrix", "lift_to_fine"]
+__all__ = ["ITERATIONS", "LIFT_ABOVE", "LIFT_K_FACTOR", "N_CANDIDATES", "N_SAMPLE", "SEARCH_DIMS", "SEARCH_EPS",
+           "extended_basis", "interpolation_matrix", "lift_to_fine", "local_nearest"]
 
 #: Vertices (of the larger mesh) above which the pipeline lifts the copies' map with this stage
 #: instead of refining it by ZoomOut and the shells on the meshes: those need the meshes' own bases
-#: and exact searches (at 80k vertices 60 s against 12 s here, the same marker error on the lion pair,
-#: 0.014), while far below it a copy 5x coarser than the mesh gave a 2x larger error (a 2000-vertex
+#: and exact searches (the lion pair at 80k vertices: 59.7 s end to end that way, 9.0 s with the lift,
+#: marker error 0.0143 and 0.0141; benchmarks/RESULTS-scale.md), while far below it a copy 5x coarser than the mesh gave a 2x larger error (a 2000-vertex
 #: creature from 400-vertex copies, tests/pipeline/test_coarse_to_fine.py).
 LIFT_ABOVE = 50_000
 #: The lift's basis size, in multiples of the refinement's ``refine_k``.

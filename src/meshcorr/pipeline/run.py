@@ -60,7 +60,7 @@ from ..stages.part_region import invert_part_map, part_region
 from .partial import match_part
 from .settings import REFINE_K, Settings, as_settings, shape_settings
 
-__all__ = ["match", "REFINE_K", "EXTREMITY_STARTS"]
+__all__ = ["match", "check_coarse_memory", "REFINE_K", "EXTREMITY_STARTS"]
 
 
 def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, settings: Settings | None = None, *,
@@ -217,6 +217,18 @@ def _renumbered(report: dict, source_numbers: np.ndarray, target_numbers: np.nda
     return dict(report, suggested_landmarks=rows)
 
 
+def check_coarse_memory(n1: int, n2: int, settings: Settings) -> None:
+    """Refuse (:class:`~meshcorr.errors.MemoryLimitError`) meshes of ``n1`` and ``n2`` vertices whose
+    coarse-to-fine run would not fit ``settings.max_memory`` (:func:`meshcorr.runtime.memory.check_coarse_fits`).
+
+    Only where the run takes that path (:func:`_coarse_copies`' conditions, point clouds aside); the
+    command line calls it with the counts the files declare, before reading them.
+    """
+    if (settings.method == "spectral" and settings.partial is None and settings.refine and not settings.bijective
+            and settings.symmetry == "auto" and needs_copy(max(n1, n2), settings.coarse_vertices)):
+        check_coarse_fits(n1, n2, resolve_memory(settings.max_memory))
+
+
 def _coarse_copies(src: Mesh, tgt: Mesh, settings: Settings, timer: StageTimer) -> tuple | None:
     """The two meshes' coarse copies (:mod:`meshcorr.core.coarse`), or None where the pair runs on the meshes.
 
@@ -231,7 +243,7 @@ def _coarse_copies(src: Mesh, tgt: Mesh, settings: Settings, timer: StageTimer) 
     # Refused before any heavy work when the path would not fit the memory allowed; above LIFT_ABOVE
     # vertices this check is the stage "large", which opens the large meshes' progress plan.
     with timer.stage("large") if max(src.n_vertices, tgt.n_vertices) > LIFT_ABOVE else nullcontext():
-        check_coarse_fits(src.n_vertices, tgt.n_vertices, resolve_memory(settings.max_memory))
+        check_coarse_memory(src.n_vertices, tgt.n_vertices, settings)
     children: dict = {}
     with timer.stage("coarse"):
         copies = tuple(coarse_copies([src, tgt], size, memory=children))  # large meshes side by side, in children

@@ -276,3 +276,21 @@ def test_no_progress_thread_is_left_after_an_error_or_ctrl_c(tube_files_with_tru
     assert "meshcorr: interrupted" in capsys.readouterr().err
     assert not [t for t in threading.enumerate() if t.name == "meshcorr-progress"]
     assert not (tmp_path / "b.txt").exists()
+
+
+def test_large_meshes_that_would_not_fit_are_refused_before_they_are_read(tmp_path, capsys):
+    # headers declaring 1.28M vertices and no data: reading them would fail, the refusal comes first
+    header = "ply\nformat binary_little_endian 1.0\nelement vertex 1280000\nproperty float x\nproperty float y\n" \
+             "property float z\nelement face 2560000\nproperty list uchar int vertex_indices\nend_header\n"
+    for name in ("a.ply", "b.ply"):
+        (tmp_path / name).write_text(header)
+    out = tmp_path / "m.txt"
+    assert main(["match", str(tmp_path / "a.ply"), str(tmp_path / "b.ply"), "-o", str(out),
+                 "--max-memory", "2GiB"]) == 2
+    err = capsys.readouterr().err
+    assert "1280000 and 1280000 vertices needs about 3.12 GiB but may use 2.00 GiB" in err
+    assert "meshes of up to 732096 vertices each fit" in err and not out.exists()
+    # the same files with room to spare go on to be read (and are refused for what they are)
+    assert main(["match", str(tmp_path / "a.ply"), str(tmp_path / "b.ply"), "-o", str(out),
+                 "--max-memory", "8GiB"]) != 0
+    assert "vertices each fit" not in capsys.readouterr().err

@@ -54,3 +54,27 @@ def test_a_small_mesh_is_its_own_copy_and_a_cloud_has_none(creature):
     assert needs_copy(2000, 400) and not needs_copy(10**6, 0)  # 0: never
     cloud = as_mesh(creature.vertices)
     assert coarse_copy(cloud, 400) is None
+
+
+def test_copies_made_in_child_processes_are_those_made_here(creature):
+    from meshcorr.core.coarse import coarse_copies
+
+    here = coarse_copies([creature, creature], 400, processes=False)
+    apart = coarse_copies([creature, creature], 400, processes=True)
+    for a, b in zip(here, apart):
+        np.testing.assert_array_equal(a.mesh.vertices, b.mesh.vertices)
+        np.testing.assert_array_equal(a.mesh.faces, b.mesh.faces)
+        np.testing.assert_array_equal(a.parent, b.parent)
+        np.testing.assert_array_equal(a.child, b.child)
+    small, cloud = coarse_copies([creature, as_mesh(creature.vertices)], 600, processes=True)
+    assert small.is_identity and cloud.is_identity  # 2000 <= 4 x 600: their own copies
+    assert coarse_copies([as_mesh(creature.vertices)], 400, processes=True) == [None]  # a cloud has none
+
+
+def test_a_child_process_that_dies_gives_no_copy(creature, monkeypatch):
+    import os
+
+    from meshcorr.core import coarse
+
+    monkeypatch.setattr(coarse, "_decimate", lambda *args: os._exit(1))  # the forked child inherits it
+    assert coarse.coarse_copies([creature], 400, processes=True) == [None]

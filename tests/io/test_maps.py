@@ -79,3 +79,16 @@ def test_an_unreadable_map_file_is_an_input_error(tmp_path, no_read_permission):
     no_read_permission("locked.txt")
     with pytest.raises(ParameterError, match=r"Cannot read the map file .*locked.txt \(MAP\): Permission denied"):
         read_map(tmp_path / "locked.txt", name="MAP")
+
+
+def test_the_vectorised_writer_gives_the_text_of_one_formatted_integer_a_line(tmp_path):
+    from meshcorr.io.maps import map_bytes, map_text
+
+    rng = np.random.default_rng(0)
+    for mapping in (rng.integers(-1, 10 ** 7, 5000), np.array([0, -1, 9, 10, 99, 100, 1000000]), np.array([-1, -1]),
+                    np.array([0]), np.array([], dtype=np.int64)):
+        expected = "".join(f"{value}\n" for value in mapping.tolist())  # the writer before issue 33
+        assert map_bytes(mapping) == expected.encode("ascii") and map_text(mapping) == expected
+        write_map(tmp_path / "m.txt", mapping)
+        assert (tmp_path / "m.txt").read_text() == expected
+        np.testing.assert_array_equal(read_map(tmp_path / "m.txt"), mapping) if len(mapping) else None

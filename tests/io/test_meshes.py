@@ -445,3 +445,19 @@ def test_a_damaged_stl_is_one_error_without_trimesh_log_lines(tmp_path, caplog):
         read_mesh(path)
     assert not [r for r in caplog.records if r.name.startswith("trimesh")]
     assert logging.getLogger("trimesh").level == logging.NOTSET  # restored
+
+
+def test_declared_vertex_count_reads_only_the_header(tmp_path):
+    from meshcorr.io.meshes import declared_vertex_count
+
+    (tmp_path / "a.ply").write_bytes(b"ply\nformat ascii 1.0\nelement vertex 12\nproperty float x\nend_header\n")
+    (tmp_path / "b.off").write_text("OFF\n# a comment\n7 3 0\n")
+    (tmp_path / "c.off").write_text("# first a comment\nOFF 9 1 0\n")
+    (tmp_path / "d.obj").write_text("v 0 0 0\n")
+    (tmp_path / "e.ply").write_bytes(b"ply\nformat ascii 1.0\n")  # no end of header
+    assert declared_vertex_count(tmp_path / "a.ply") == 12
+    assert declared_vertex_count(tmp_path / "b.off") == 7
+    assert declared_vertex_count(tmp_path / "c.off") == 9
+    assert declared_vertex_count(tmp_path / "d.obj") is None  # an OBJ declares nothing
+    assert declared_vertex_count(tmp_path / "e.ply") is None
+    assert declared_vertex_count(tmp_path / "missing.ply") is None

@@ -54,3 +54,19 @@ def test_check_bijective_fits_cost_matrix():
 def test_default_max_memory_is_a_fraction_of_what_is_available():
     limit = default_max_memory()
     assert limit is None or limit > 0
+
+
+def test_the_coarse_path_is_refused_when_it_would_not_fit_and_the_message_says_what_fits():
+    from meshcorr.runtime.memory import check_coarse_fits, coarse_path_fits, coarse_path_memory
+
+    limit = 2 * 1024 ** 3
+    largest = coarse_path_fits(limit)
+    assert coarse_path_memory(largest, largest) <= limit < coarse_path_memory(largest + 1, largest + 1)
+    check_coarse_fits(largest, largest, limit)
+    check_coarse_fits(10 ** 7, 10 ** 7, None)  # no limit known
+    # linear: doubling the vertices at most doubles the peak above the fixed base
+    base = coarse_path_memory(0, 0)
+    assert coarse_path_memory(2 * 10 ** 6, 2 * 10 ** 6) - base == 2 * (coarse_path_memory(10 ** 6, 10 ** 6) - base)
+    with pytest.raises(MemoryLimitError, match=rf"1280000 and 1280000 vertices .* meshes of up to {largest} "
+                                               r"vertices each fit\. .*--max-memory"):
+        check_coarse_fits(1280000, 1280000, limit)

@@ -255,3 +255,21 @@ def test_stderr_lines_per_stage_without_a_plan_rise_and_tick():
     assert lines[3].startswith("[drawing] ")
     assert len([line for line in lines if line.startswith("[drawing] ")]) >= 2  # ticks, then its end
     assert lines[-1].startswith("[drawing] done in ")
+
+
+def test_the_first_path_opened_holds_so_large_meshes_keep_their_plan_through_coarse():
+    plan = RunPlan(stages=PLAN.stages, paths={**PLAN.paths, "large": (("load", 1.0), ("large", 0.0),
+                                                                       ("coarse", 2.0), ("lift", 7.0))})
+    run = RunProgress(plan, clock=FakeClock())
+    _timer_reports(run, "load", "large", "coarse")
+    assert run.fraction == pytest.approx(0.3)  # the large path's load 1 and coarse 2 of 10, not coarse's 2 of 10
+    run.update("lift", 0, 1)
+    run.update("lift", 1, 3)  # lift_to_fine's reports, one per search
+    assert run.fraction == pytest.approx(0.3 + 0.7 / 3)
+
+
+def test_the_match_plan_has_a_path_for_large_meshes_ending_in_the_lift():
+    from meshcorr.runtime.progress import MATCH_PLAN
+
+    names = [name for name, _ in MATCH_PLAN.paths["large"]]
+    assert names[:3] == ["load", "large", "coarse"] and names[-1] == "lift"

@@ -17,7 +17,7 @@ from ..runtime.checks import MapMessages, check_vertex_map
 from .arrays import load_npy
 from .files import atomic_write
 
-__all__ = ["map_text", "read_map", "write_map"]
+__all__ = ["map_bytes", "map_text", "read_map", "write_map"]
 
 #: The words of a map that :func:`write_map` refuses (:func:`meshcorr.runtime.checks.check_vertex_map`).
 _WRITTEN_MAP = MapMessages(
@@ -41,13 +41,42 @@ def write_map(path, mapping) -> None:
     if Path(path).suffix.lower() == ".npy":
         atomic_write(path, lambda file: np.save(file, mapping, allow_pickle=False))
     else:
-        text = map_text(mapping)
-        atomic_write(path, lambda file: file.write(text.encode("ascii")))
+        text = map_bytes(mapping)
+        atomic_write(path, lambda file: file.write(text))
 
 
 def map_text(mapping) -> str:
     """A vertex map as the text :func:`write_map` writes: one integer per line."""
-    return "".join(f"{value}\n" for value in np.asarray(mapping).tolist())
+    return map_bytes(mapping).decode("ascii")
+
+
+def map_bytes(mapping) -> bytes:
+    r"""``(n,)`` int -> the ASCII bytes of one integer a line, in one vectorised pass.
+
+    Each value's decimal digits are the columns of an ``(n, w + 2)`` byte
+    matrix (a sign column, ``w`` digit columns :math:`\lfloor |v| / 10^j
+    \rfloor \bmod 10`, a newline column); a mask keeps the sign of negative
+    values and the digits from the leading one on (the last digit always),
+    and the kept bytes in row order are the text. Written out because
+    Python's per-value formatting (``str``, ``numpy.savetxt``) took 0.5-2.7 s
+    at 1.28M lines, this ~0.15 s.
+    """
+    values = np.asarray(mapping, dtype=np.int64).ravel()
+    if not len(values):
+        return b""
+    magnitude = np.abs(values)
+    width = len(str(int(magnitude.max())))
+    powers = 10 ** np.arange(width - 1, -1, -1, dtype=np.int64)
+    chars = np.empty((len(values), width + 2), dtype=np.uint8)
+    keep = np.empty(chars.shape, dtype=bool)
+    chars[:, 0], keep[:, 0] = ord("-"), values < 0
+    rest = magnitude
+    for column in range(width, 0, -1):  # one scalar divisor a column: numpy's fast division by a constant
+        rest, digit = np.divmod(rest, 10)
+        chars[:, column] = digit + ord("0")
+    keep[:, 1:-1] = powers <= np.maximum(magnitude, 1)[:, None]
+    chars[:, -1], keep[:, -1] = ord("\n"), True
+    return chars[keep].tobytes()
 
 
 def read_map(path, *, name: str | None = None) -> np.ndarray:

@@ -26,7 +26,7 @@ from .arrays import load_npy
 from .files import atomic_write
 from .off import parse_off
 
-__all__ = ["POINT_FORMATS", "SUPPORTED_FORMATS", "quiet_trimesh", "read_mesh", "write_mesh"]
+__all__ = ["POINT_FORMATS", "SUPPORTED_FORMATS", "declared_vertex_count", "quiet_trimesh", "read_mesh", "write_mesh"]
 
 #: File extensions read_mesh and write_mesh understand, and their format names.
 SUPPORTED_FORMATS = {".off": "OFF", ".obj": "OBJ", ".ply": "PLY", ".stl": "STL"}
@@ -59,6 +59,32 @@ def _declared_counts(data: bytes, fmt: str) -> tuple[int | None, int | None]:
         n_f = re.search(r"^element\s+face\s+(\d+)", header, flags=re.MULTILINE)
         return (int(n_v.group(1)) if n_v else None), (int(n_f.group(1)) if n_f else None)
     return None, None
+
+
+def declared_vertex_count(path) -> int | None:
+    """The vertex count a PLY or OFF file declares in its header, read from its first 64 KiB; None otherwise.
+
+    For checks made before a file is read (the memory a run will need): the
+    count is the file's, before any vertex is dropped (unused vertices, the
+    largest connected component). None for other formats, a file that cannot
+    be opened, or a header that does not say.
+    """
+    fmt = {**SUPPORTED_FORMATS, **POINT_FORMATS}.get(Path(path).suffix.lower())
+    if fmt not in ("PLY", "OFF"):
+        return None
+    try:
+        with open(path, "rb") as file:
+            head = file.read(1 << 16)
+    except OSError:
+        return None
+    if fmt == "PLY":
+        return _declared_counts(head, "PLY")[0]
+    lines = [line.split(b"#")[0].split() for line in head.splitlines()[:64]]
+    tokens = [token for line in lines for token in line][:4]  # "OFF" (or "COFF", ...) and the counts
+    if len(tokens) >= 2 and tokens[0].endswith(b"OFF"):
+        count = _int_or_none(tokens[1].decode("ascii", errors="replace"))
+        return count if count is not None and count >= 0 else None
+    return None
 
 
 def _ply_header(data: bytes) -> str | None:

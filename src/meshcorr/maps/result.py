@@ -98,6 +98,9 @@ class Correspondence:
         Seconds of work done in a worker thread while the stages ran
         (``"refine_bases"``: the refinement's Laplace-Beltrami bases, see
         :func:`meshcorr.stages.refine.prefetch_bases`); not part of the sum above.
+    stage_memory : dict
+        Peak resident memory of the process (MiB) while each stage ran
+        (:class:`meshcorr.runtime.timing.StageTimer`; empty off Linux).
     params : dict
         The options used; ``shells`` and ``fill_holes`` as they ran (False
         where they do not apply: point clouds, ``bijective``, ``partial``,
@@ -182,6 +185,7 @@ class Correspondence:
     icp_converged: bool = False
     timings: dict = field(default_factory=dict)
     background_timings: dict = field(default_factory=dict)
+    stage_memory: dict = field(default_factory=dict)
     params: dict = field(default_factory=dict)
     candidates: list[dict] = field(default_factory=list)
     alternative_map: np.ndarray | None = None
@@ -231,6 +235,7 @@ class Correspondence:
                     "history": self.icp_history},
             "timings": {k: round(v, 4) for k, v in self.timings.items()},
             "background_timings": {k: round(v, 4) for k, v in self.background_timings.items()},
+            "stage_memory": {k: round(v, 1) for k, v in self.stage_memory.items()},
             "params": self.params,
             "candidates": self.candidates,
             "orientation_reliable": self.orientation_reliable,

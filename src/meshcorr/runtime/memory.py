@@ -11,6 +11,14 @@ assignment solver makes. Peak bytes, meshes processed one after the other:
     8 \\max\\left(3 n_1^2,\\; n_1^2 + 3 n_2^2,\\;
     n_1^2 + n_2^2 + 2 n_1 n_2 [\\text{bijective}]\\right)
 
+The coarse-to-fine path of large meshes (:mod:`meshcorr.stages.lift`)
+holds only arrays linear in the vertex counts; its peak is modelled as a
+fixed base plus a cost per vertex of the two meshes,
+:math:`B + b (n_1 + n_2)` (:func:`coarse_path_memory`), fitted above the
+peaks measured on the Sumner lion pair at 320k and 1.28M vertices
+(``benchmarks/RESULTS-scale.md``, issue 33), and a run that would not fit
+is refused before the coarse copies are made (:func:`check_coarse_fits`).
+
 It is an upper estimate: at 5000 + 5000 vertices it gives 763 MiB, and the
 measured peak resident memory of the whole process was 701 MiB (imports
 included; ``benchmarks/RESULTS-scale.md``). The scalable mode
@@ -85,6 +93,37 @@ def dense_memory(n1: int, n2: int, *, bijective: bool = False) -> int:
     if bijective:
         peak = max(peak, n1 * n1 + n2 * n2 + 2 * n1 * n2)
     return 8 * peak
+
+
+#: Fixed part of the coarse-to-fine path's peak (bytes): the interpreter, the libraries, the copies' pipeline.
+COARSE_PATH_BASE = 512 * 1024 ** 2
+#: Bytes per vertex (of both meshes together) of the coarse-to-fine path's peak: measured 2.56 GiB at
+#: 2 x 1.28M vertices and 0.9 GiB at 2 x 320k (about 900 bytes a vertex above the base), with a margin.
+COARSE_PATH_PER_VERTEX = 1100
+
+
+def coarse_path_memory(n1: int, n2: int) -> int:
+    """Peak bytes of the coarse-to-fine path for meshes of ``n1`` and ``n2`` vertices (module docstring)."""
+    return COARSE_PATH_BASE + COARSE_PATH_PER_VERTEX * (int(n1) + int(n2))
+
+
+def coarse_path_fits(max_memory: int) -> int:
+    """The most vertices each of two equal meshes may have for the coarse-to-fine path to fit ``max_memory``."""
+    return max(0, (int(max_memory) - COARSE_PATH_BASE) // (2 * COARSE_PATH_PER_VERTEX))
+
+
+def check_coarse_fits(n1: int, n2: int, max_memory: int | None) -> None:
+    """Raise :class:`MemoryLimitError` if the coarse-to-fine path would exceed ``max_memory`` bytes.
+
+    The message names the need, the allowance and the largest meshes that fit.
+    """
+    need = coarse_path_memory(n1, n2)
+    if max_memory is not None and need > max_memory:
+        raise MemoryLimitError(
+            f"Matching meshes of {n1} and {n2} vertices needs about {_gib(need)} but may use "
+            f"{_gib(max_memory)}: meshes of up to {coarse_path_fits(max_memory)} vertices each fit. "
+            "Allow more memory (max_memory, --max-memory) or decimate the meshes first."
+        )
 
 
 def _gib(nbytes: int) -> str:

@@ -60,6 +60,9 @@ class RunPlan(NamedTuple):
 #: - coarse-to-fine ("coarse": meshes above 4 x ``coarse_vertices``): two 64 000-vertex creatures
 #:   (``creature(resolution=6)`` at rest and at pose 0.4, each subdivided once by trimesh; 111 s in all, of
 #:   which 83 s the last "shells" and 20 s the two last "refine", on the meshes);
+#: - large meshes (above :data:`meshcorr.stages.lift.LIFT_ABOVE` vertices, "large", the memory check, opens
+#:   it): the Sumner lion pair subdivided to 1.28M vertices (``benchmarks/million.py``; 124 s in all, of which
+#:   51 s the "lift", 25 s "coarse", 23 s "whole-map" and 15 s "load");
 #: - a part against the whole (``partial="source"``, "whole-to-whole" opens it): the rest creature of
 #:   resolution 2 cut by ``cut_by_plane(keep=0.7)`` against the posed one (2.5 s in all).
 #:
@@ -76,6 +79,10 @@ MATCH_PLAN = RunPlan(
                    ("embedding", 0.01), ("reorder", 0.2), ("symmetry", 0.03), ("icp", 0.32), ("symmetry", 0.15),
                    ("matching", 0.21), ("refine", 0.0), ("refine", 0.09), ("whole-map", 2.46), ("shells", 2.72),
                    ("shells", 0.0), ("refine", 4.07), ("refine", 15.66), ("shells", 82.76)),
+        "large": (("load", 14.5), ("large", 0.0), ("coarse", 25.1), ("geodesics", 0.11), ("embedding", 0.0),
+                  ("geodesics", 0.11), ("embedding", 0.0), ("reorder", 0.11), ("symmetry", 0.04), ("icp", 0.16),
+                  ("symmetry", 0.03), ("matching", 0.08), ("refine", 0.0), ("refine", 0.03), ("whole-map", 23.5),
+                  ("shells", 8.2), ("shells", 0.0), ("lift", 50.7)),
         "whole-to-whole": (("load", 0.005), ("whole-to-whole", 1.731), ("extremities", 0.036),
                            ("candidates", 0.279), ("refine", 0.095), ("shells", 0.177), ("region", 0.002)),
     })
@@ -150,7 +157,8 @@ class RunProgress:
         return started
 
     def _begin(self, stage: str) -> None:
-        if stage in self.plan.paths and self._path != stage:  # e.g. "coarse": the coarse-to-fine path
+        if stage in self.plan.paths and self._path is None:  # e.g. "coarse": the coarse-to-fine path (the first
+            # path opened holds: "large" opens the large meshes' path before their "coarse")
             self._path, self._entries, self._next = stage, self._normalised(self.plan.paths[stage]), 0
         now = self.clock()
         self.stage = self.label = stage

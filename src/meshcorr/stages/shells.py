@@ -336,6 +336,10 @@ def _rigid(points: np.ndarray, onto: np.ndarray, weights: np.ndarray, side: floa
     return lambda x: (x - mean_p) @ rotation + mean_q
 
 
+#: The shells' orthogonal motion (:func:`_rigid`), for the lift of :mod:`meshcorr.stages.lift`.
+rigid_motion = _rigid
+
+
 def _unit_shape(mesh: Mesh, fraction: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Coordinates scaled to unit area (of the whole, for a part covering ``fraction`` of it) and centred
     on the centroid, and the unit-sum vertex masses."""

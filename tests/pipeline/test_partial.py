@@ -70,6 +70,29 @@ def test_the_part_starts_from_the_default_map_and_is_aligned_by_its_shells(creat
     assert _error(target, plain.map, truth[kept]) < ERROR_TOLERANCE
 
 
+def test_the_whole_to_whole_start_of_a_part_searches_the_signs(creature_rest_and_bent_moved, monkeypatch):
+    # A part's tips are a subset of the whole's: its whole-to-whole start also takes the sign search's
+    # starts (meshcorr.choice.sign_search), whatever sign_search says; whole shapes only when asked.
+    import meshcorr.choice.whole_map as whole_map
+
+    source, target, truth, _ = creature_rest_and_bent_moved
+    part, kept = cuts.cut_by_plane(source, keep=0.7, random_state=0)
+    calls = []
+    original = whole_map.sign_search_starts
+
+    def counted(src, tgt, **kwargs):
+        calls.append((src.n_vertices, tgt.n_vertices))
+        return original(src, tgt, **kwargs)
+
+    monkeypatch.setattr(whole_map, "sign_search_starts", counted)
+    result = meshcorr.match(part, target, partial="source")
+    assert calls and calls[0][1] == target.n_vertices and result.params["sign_search"] is True
+    assert _error(target, result.map, truth[kept]) < ERROR_TOLERANCE
+    calls.clear()
+    meshcorr.match(source, target)
+    assert calls == []
+
+
 def test_removed_geodesic_balls(creature_rest_and_bent_moved):
     source, target, truth, back = creature_rest_and_bent_moved
     part, kept = cuts.remove_balls(source, keep=0.8, n_balls=3, random_state=0)

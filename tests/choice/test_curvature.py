@@ -11,9 +11,9 @@ from meshcorr.errors import ParameterError
 from meshcorr.core.mesh import Mesh
 
 
-def nosed_sphere():
+def nosed_sphere(subdivisions: int = 4):
     """A sphere with a bump (a "nose") at +x and a dent at -x: front and back differ."""
-    V, F = ds.sphere(subdivisions=4)
+    V, F = ds.sphere(subdivisions=subdivisions)
     r = 1.0 + 0.4 * np.exp(-np.sum((V - [1, 0, 0]) ** 2, axis=1) / 0.05) \
         - 0.3 * np.exp(-np.sum((V - [-1, 0, 0]) ** 2, axis=1) / 0.05)
     return V * r[:, None], F
@@ -59,6 +59,24 @@ def test_ball_average_agrees_across_resolutions():
     a, b = smoothed_curvature(coarse, some, 0.08), smoothed_curvature(fine, some, 0.08)
     assert np.corrcoef(a, b)[0, 1] > 0.95
     np.testing.assert_allclose(np.median(b / a), 1.0, atol=0.1)
+
+
+def test_above_field_max_the_balls_sum_over_a_sample_and_agree(monkeypatch):
+    # Large meshes average over a seeded uniform sample of FIELD_MAX vertices (each with its area): the
+    # cost of a ball stops growing with the vertex count, the averages stay those of every vertex.
+    from meshcorr.choice import curvature
+
+    V, F = nosed_sphere(subdivisions=5)  # 10242 vertices, a smooth field
+    some = np.arange(0, len(V), 17)
+    full = smoothed_curvature(Mesh(V, F), some, 0.08)
+    monkeypatch.setattr(curvature, "FIELD_MAX", len(V) // 4)  # ~50 sampled vertices a ball
+    mesh = Mesh(V, F)
+    sampled = smoothed_curvature(mesh, some, 0.08)
+    assert len(mesh.store[("curvature_field",)][1]) == len(V) // 4  # the balls' vertices
+    assert not np.array_equal(sampled, full)
+    assert np.corrcoef(full, sampled)[0, 1] > 0.95
+    assert np.median(np.abs(sampled - full)) < 0.02 * np.std(full)
+    np.testing.assert_array_equal(smoothed_curvature(Mesh(V, F), some, 0.08), sampled)  # seeded
 
 
 def test_a_half_turn_that_puts_the_nose_behind_disagrees():

@@ -92,7 +92,9 @@ def _start(files, *extra) -> tuple[subprocess.Popen, str]:
     process = subprocess.Popen([sys.executable, "-m", "meshcorr", "pick", str(files / "a.off"), str(files / "b.off"),
                                 "-o", str(files / "saved.txt"), "--no-browser", *extra],
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               env={**os.environ, "PYTHONPATH": str(SRC)})
+                               env={**os.environ, "PYTHONPATH": str(SRC)},
+                               # A test run started in the background ignores SIGINT, and the child would inherit it.
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     url = process.stdout.readline().strip()
     assert url.startswith("http://127.0.0.1:"), process.stderr.read() if process.poll() is not None else url
     return process, url

@@ -55,7 +55,7 @@ from robustness import DATA, _spread, appending, build_sets, previous_rows, scor
 
 FIELDS = ["set", "half", "source", "target", "origin", "chosen", "eligible", "orientation", "before",
           "distortion", "curvature", "alignment", "extrinsic", "deformation", "landmarks_kept", "mean_error",
-          "flipped", "partial"]
+          "flipped", "partial", "gaps"]
 TERMS = ("distortion", "curvature", "before", "orientation")
 LIBRARY = np.array([1.0, 3.0, 1.0, 1.0])
 
@@ -63,30 +63,44 @@ LIBRARY = np.array([1.0, 3.0, 1.0, 1.0])
 def collect_pair(pair, half: str) -> list[dict]:
     """One row per candidate the choice ranked."""
     seen: list = []
-    original = whole_map.choose_map
+    original, original_choice = whole_map.choose_map, whole_map.whole_map_choice
+    rows_of: dict = {}
 
     def capture(candidates, *, reliable):
         seen.append((list(candidates), eligible(candidates, reliable=reliable), reliable))
         return original(candidates, reliable=reliable)
 
+    def capture_geodesics(src, tgt, spectra, *args, **kwargs):
+        rows_of["target"], rows_of["n"] = spectra[1].geodesics_from, src.n_vertices
+        return original_choice(src, tgt, spectra, *args, **kwargs)
+
     source = as_mesh(pair.source_path, name=pair.source_name)
     target = as_mesh(pair.target_path, name=pair.target_name)
     landmarks = truth_landmarks(pair, source) if pair.set.endswith("+5") else None
-    whole_map.choose_map = capture
+    import meshcorr.pipeline.run as run
+
+    whole_map.choose_map, run.whole_map_choice = capture, capture_geodesics
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             result = meshcorr.match(source, target, landmarks=landmarks)
     finally:
-        whole_map.choose_map = original
+        whole_map.choose_map, run.whole_map_choice = original, original_choice
     if not seen:
         return []
     candidates, pool, _ = seen[-1]
     chosen = {c["origin"] for c in result.map_candidates if c["chosen"]}
     pool_ids = {id(c) for c in pool}
     cache = GeodesicCache("heat")
+    # Mean normalised geodesic distance on the target between each two candidates' images of the
+    # distortion's seeded sources (meshcorr.choice.confidence's measure of "another configuration").
+    from meshcorr.choice.selection import distortion_sources
+    seeds = distortion_sources(rows_of["n"], 0)
+    images = [[np.asarray(rows_of["target"](int(c.mapping[i]))) for i in seeds] for c in candidates]
+    gaps = [[round(float(np.mean([row[d.mapping[i]] for row, i in zip(images[a], seeds)])), 4)
+             for d in candidates] for a in range(len(candidates))]
     rows = []
-    for c in candidates:
+    for index, c in enumerate(candidates):
         if c.mapping.shape[0] != source.n_vertices:  # coarse copies: not scored here
             return []
         rows.append(dict(set=pair.set, half=half, source=pair.source_name, target=pair.target_name,
@@ -95,6 +109,7 @@ def collect_pair(pair, half: str) -> list[dict]:
                          distortion=c.distortion, curvature=c.curvature,
                          alignment=c.extra.get("alignment", np.nan), extrinsic=c.extra.get("extrinsic", np.nan),
                          deformation=c.extra.get("deformation", np.nan), landmarks_kept=c.landmarks_kept,
+                         gaps=" ".join(str(g) for g in gaps[index]),
                          **{k: v for k, v in score(pair, target, c.mapping, cache).items()
                             if k in ("mean_error", "flipped", "partial")}))
     return rows
@@ -195,6 +210,42 @@ def fit_scale(pairs: dict, half: str = "a") -> float:
     return float(minimize_scalar(loss, bounds=(0.01, 20.0), method="bounded").x)
 
 
+def pick_configuration(rows: list[dict], tau: float, within: float = 0.1) -> dict:
+    """The candidate whose global configuration is most probable: the summed softmax(-tau x library
+    log-energy) of the eligible candidates within ``within`` of it (the ``gaps`` column), ties to the least
+    energy."""
+    index = {id(r): i for i, r in enumerate(rows)}
+    pool = [r for r in rows if r["eligible"]]
+    energies = np.array([float(features(r) @ LIBRARY) for r in pool])
+    weights = np.exp(-tau * (energies - energies.min()))
+    gaps = [[float(g) for g in r["gaps"].split()] for r in pool]
+    mass = [sum(w for other, w in zip(pool, weights) if gaps[a][index[id(other)]] <= within)
+            for a in range(len(pool))]
+    best = max(range(len(pool)), key=lambda a: (round(mass[a], 9), -energies[a]))
+    return pool[best]
+
+
+def configuration_report(pairs: dict) -> str:
+    """Mean error per set and half of the most probable configuration's candidate, for a few tau."""
+    pairs = {k: v for k, v in pairs.items() if all(r.get("gaps") for r in v)}
+    sets = sorted({k[0] for k in pairs})
+    lines = []
+    for half in "ab":
+        lines += [f"\nHalf {half} (the configuration rule):\n", "| rule | " + " | ".join(sets) + " |",
+                  "|---|" + "---|" * len(sets)]
+        rules = {"library": lambda rows: pick(rows, LIBRARY), "oracle": lambda rows: min(rows, key=lambda r: r["mean_error"])}
+        for tau in (0.25, 0.5, 1.0, 2.0, 4.0):
+            rules[f"most probable configuration, tau {tau}"] = lambda rows, tau=tau: pick_configuration(rows, tau)
+        for name, rule in rules.items():
+            cells = []
+            for s in sets:
+                picked = [rule(rows) for k, rows in pairs.items() if k[0] == s and k[1] == half]
+                cells.append(f"{np.mean([r['mean_error'] for r in picked]):.4f} ({len(picked)}, "
+                             f"{sum(r['flipped'] for r in picked)} flips)")
+            lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def report(pairs: dict, rules: dict) -> str:
     sets = sorted({k[0] for k in pairs})
     lines = []
@@ -236,6 +287,8 @@ def main(argv=None) -> int:
     print(report(pairs, {"library (1, 3, 1, 1)": (LIBRARY, ()), "fitted on half a": (weights, ()),
                          "fitted, with the shells' energies": (wider, EXTRA_TERMS),
                          "distortion only": (np.array([1.0, 0, 0, 0]), ()), "oracle": (None, ())}))
+    if any(r.get("gaps") for rows in pairs.values() for r in rows):
+        print(configuration_report(pairs))
     return 0
 
 

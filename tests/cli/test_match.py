@@ -278,6 +278,18 @@ def test_no_progress_thread_is_left_after_an_error_or_ctrl_c(tube_files_with_tru
     assert not (tmp_path / "b.txt").exists()
 
 
+def test_match_refuses_large_files_from_their_headers_in_python(tmp_path):
+    # The library call does the same check as the command line, before the files are read.
+    import meshcorr
+    from meshcorr.errors import MemoryLimitError
+
+    header = "OFF\n1280000 2560000 0\n"  # no data: reading would fail, the refusal comes first
+    for name in ("a.off", "b.off"):
+        (tmp_path / name).write_text(header)
+    with pytest.raises(MemoryLimitError, match="meshes of up to 732096 vertices each fit"):
+        meshcorr.match(str(tmp_path / "a.off"), tmp_path / "b.off", max_memory="2GiB")
+
+
 def test_large_meshes_that_would_not_fit_are_refused_before_they_are_read(tmp_path, capsys):
     # headers declaring 1.28M vertices and no data: reading them would fail, the refusal comes first
     header = "ply\nformat binary_little_endian 1.0\nelement vertex 1280000\nproperty float x\nproperty float y\n" \

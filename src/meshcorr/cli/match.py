@@ -303,13 +303,8 @@ def _match(args, landmarks):
     """``meshcorr.match`` with the options of ``meshcorr match`` (:func:`settings_of`)."""
     from .. import match
 
-    from ..io.meshes import declared_vertex_count
-    from ..pipeline.run import check_coarse_memory
-
+    # Large PLY/OFF files that would not fit --max-memory: match refuses them from their headers.
     settings = settings_of(args, landmarks)
-    counts = declared_vertex_count(args.source), declared_vertex_count(args.target)
-    if None not in counts:  # large meshes that would not fit --max-memory: refused before they are read
-        check_coarse_memory(*counts, settings)
     label = f"{os.path.basename(args.source)} -> {os.path.basename(args.target)}"
     with reporting(args, label, MATCH_PLAN) as progress:
         return match(args.source, args.target, settings, progress=progress)

@@ -25,6 +25,7 @@ spectral domain", Shape Modeling International 2006.
 
 from __future__ import annotations
 
+import os
 import warnings
 from contextlib import nullcontext
 from typing import NamedTuple
@@ -38,6 +39,7 @@ from ..choice.symmetry import ConfigurationCandidate, choose, score_configuratio
 from ..choice.whole_map import EXTREMITY_STARTS, WholeMapChoice, whole_map_choice
 from ..core.coarse import CoarseCopy, coarse_copies, needs_copy
 from ..core.holes import restrict
+from ..io.meshes import declared_vertex_count
 from ..core.mesh import Mesh, MeshLike
 from ..errors import MeshWarning, ParameterError, PartialShapeWarning, UnsureChoiceWarning
 from ..maps import result as result_module
@@ -108,6 +110,7 @@ def match(source: MeshLike | PreparedShape, target: MeshLike | PreparedShape, se
             return _match_baseline(source, target, settings, progress)
         timer = StageTimer(progress)
         max_memory = resolve_memory(settings.max_memory)
+        _check_declared_sizes(source, target, settings)
         shapes, pairs = _load(source, target, settings, timer)
         if settings.partial is not None:  # a part against the whole: meshcorr.pipeline.partial
             return _match_partial(shapes, pairs, settings, max_memory, timer)
@@ -219,12 +222,22 @@ def _renumbered(report: dict, source_numbers: np.ndarray, target_numbers: np.nda
     return dict(report, suggested_landmarks=rows)
 
 
+def _check_declared_sizes(source, target, settings: Settings) -> None:
+    """Two files (PLY or OFF) whose declared vertex counts would not fit ``max_memory``: refused before
+    they are read (:func:`check_coarse_memory`); anything else is checked once loaded."""
+    if not all(isinstance(shape, (str, os.PathLike)) for shape in (source, target)):
+        return
+    counts = declared_vertex_count(source), declared_vertex_count(target)
+    if None not in counts:
+        check_coarse_memory(*counts, settings)
+
+
 def check_coarse_memory(n1: int, n2: int, settings: Settings) -> None:
     """Refuse (:class:`~meshcorr.errors.MemoryLimitError`) meshes of ``n1`` and ``n2`` vertices whose
     coarse-to-fine run would not fit ``settings.max_memory`` (:func:`meshcorr.runtime.memory.check_coarse_fits`).
 
-    Only where the run takes that path (:func:`_coarse_copies`' conditions, point clouds aside); the
-    command line calls it with the counts the files declare, before reading them.
+    Only where the run takes that path (:func:`_coarse_copies`' conditions, point clouds aside);
+    :func:`match` calls it with the counts two files declare, before reading them.
     """
     if (settings.method == "spectral" and settings.partial is None and settings.refine and not settings.bijective
             and settings.symmetry == "auto" and needs_copy(max(n1, n2), settings.coarse_vertices)):

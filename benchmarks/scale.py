@@ -54,6 +54,7 @@ from pathlib import Path
 
 import numpy as np
 
+from meshcorr.runtime.timing import peak_resident_mib, reset_peak
 from meshcorr.spectral.modes import SCALABLE_ABOVE
 
 HERE = Path(__file__).resolve().parent
@@ -136,20 +137,9 @@ def _truth_points(truth, n_source: int) -> tuple[np.ndarray, np.ndarray]:
 
 # --- the worker: one run in a fresh process -------------------------------------
 
-def _hwm_kib() -> int:
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1])
-    return 0
-
-
-def _reset_hwm() -> None:
-    try:
-        with open("/proc/self/clear_refs", "w") as f:
-            f.write("5")
-    except OSError:
-        pass
+def _hwm_kib() -> float:
+    """The process's peak resident KiB since the last :func:`meshcorr.runtime.timing.reset_peak` (0 off Linux)."""
+    return 1024 * (peak_resident_mib() or 0.0)
 
 
 def _errors(target: str, mapping: np.ndarray, job: dict) -> dict:
@@ -177,12 +167,12 @@ def _run_meshcorr(job: dict) -> dict:
 
     def progress(stage, done, total):
         if done == 0:
-            _reset_hwm()
+            reset_peak()
         elif done == total:
             peaks[stage] = max(peaks.get(stage, 0), _hwm_kib())
 
     start, cpu = time.perf_counter(), time.process_time()
-    _reset_hwm()
+    reset_peak()
     result = meshcorr.match(job["source"], job["target"], progress=progress, **job["options"])
     wall, cpu = time.perf_counter() - start, time.process_time() - cpu
     out = dict(wall=wall, cpu=cpu, timings=result.timings, peak_mib={k: v / 1024 for k, v in peaks.items()},

@@ -48,7 +48,7 @@ from typing import Callable
 
 import numpy as np
 
-__all__ = ["LOW_MARGIN", "RIVAL_DISTANCE", "Confidence", "choice_confidence", "unsure_message"]
+__all__ = ["LOW_MARGIN", "RIVAL_DISTANCE", "Confidence", "choice_confidence", "no_rival", "unsure_message"]
 
 #: A candidate whose images lie on average farther than this from the chosen map's is a rival.
 RIVAL_DISTANCE = 0.1
@@ -135,7 +135,7 @@ def choice_confidence(candidates: list, chosen, energies: dict, source_geodesics
             if best is None or energies[id(candidate)] < energies[id(best)]:
                 best, best_gaps = candidate, gaps
     if best is None:
-        return Confidence(float("inf"), None, np.empty((0, 3), dtype=np.int64))
+        return no_rival()
     values = np.array([-energies[id(c)] for c in candidates])
     weights = np.exp(values - values.max())
     kept = np.array([id(c) not in rivals for c in candidates])
@@ -151,6 +151,11 @@ def choice_confidence(candidates: list, chosen, energies: dict, source_geodesics
     chosen_sources = sources[picked]
     suggestions = np.stack([chosen_sources, chosen.mapping[chosen_sources], best.mapping[chosen_sources]], axis=1)
     return Confidence(margin, best.origin, suggestions.astype(np.int64), probability)
+
+
+def no_rival() -> Confidence:
+    """The confidence of a choice no other configuration competed with: infinite margin, probability 1."""
+    return Confidence(float("inf"), None, np.empty((0, 3), dtype=np.int64))
 
 
 def unsure_message(report: dict) -> str:

@@ -116,10 +116,10 @@ def whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, sp
         score_candidates(candidates, src, tgt, g1, g2, reliable=reliable, landmarks=pairs, random_state=random_state,
                          fine=fine)
     copies: list[MapCandidate] = []  # near-copies of kept candidates: listed in the summaries only
+    sources = distortion_sources(src.n_vertices, random_state)  # where maps are compared
     if shells and reliable:  # judge the maps as they will be returned (module docstrings of these steps)
         with timer.stage("shells"):
             scored = dict(reliable=reliable, landmarks=pairs, random_state=random_state, fine=fine)
-            sources = distortion_sources(src.n_vertices, random_state)
             candidates, copies = distinct_candidates(candidates, g2, sources, reliable=reliable)  # repaired once
             repaired = repair_candidates(candidates, src, tgt, k=refine_k, random_state=random_state)
             score_candidates(repaired, src, tgt, g1, g2, **scored)
@@ -130,8 +130,7 @@ def whole_map_choice(src: Mesh, tgt: Mesh, spectra, spectral_map: np.ndarray, sp
             score_candidates(final, src, tgt, g1, g2, **scored)
     chosen, alternative = choose_map(candidates, reliable=reliable)
     pool = eligible(candidates, reliable=reliable)  # the rivals: maps the rules would have let win
-    confidence = choice_confidence(pool, chosen, {id(c): map_energy(c, reliable) for c in pool}, g1, g2,
-                                   distortion_sources(src.n_vertices, random_state))
+    confidence = choice_confidence(pool, chosen, {id(c): map_energy(c, reliable) for c in pool}, g1, g2, sources)
     doubts = None
     if pairs is not None:  # warned before the landmarks are pinned below
         doubts = landmark_doubts(candidates, chosen, pairs, g1, g2, reliable=reliable)

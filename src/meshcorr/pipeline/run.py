@@ -33,7 +33,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..core.orientation import mesh_orientation
-from ..choice.confidence import unsure_message
+from ..choice.confidence import no_rival, unsure_message
 from ..choice.reverse_check import CYCLE_LIMIT, cycle_error
 from ..choice.symmetry import ConfigurationCandidate, choose, score_configurations
 from ..choice.whole_map import EXTREMITY_STARTS, WholeMapChoice, whole_map_choice
@@ -133,8 +133,7 @@ def _reverse_checked(result: Correspondence, source, target, settings: Settings)
         reverse = match(target, source, settings.replace(check_reverse=False, landmarks=landmarks))
     error = cycle_error(result.source, result.map, reverse.map, geodesic=settings.geodesic,
                         random_state=settings.random_state)
-    report = dict(result.confidence or {"margin": None, "probability": 1.0, "low": False, "rival": None,
-                                        "suggested_landmarks": []})
+    report = dict(result.confidence or no_rival().to_dict())
     report.update(cycle_error=round(error, 4), low=bool(report["low"] or error > CYCLE_LIMIT))
     return report
 

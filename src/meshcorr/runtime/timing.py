@@ -39,7 +39,7 @@ class StageTimer:
     def stage(self, name: str):
         if self.progress is not None:
             self.progress(name, 0, 1)
-        _reset_peak()
+        reset_peak()
         start = time.perf_counter()
         try:
             yield
@@ -58,7 +58,7 @@ class StageTimer:
         return lambda done, total: self.progress(name, done, total)
 
 
-def _reset_peak() -> None:
+def reset_peak() -> None:
     """Reset the process's peak resident set (Linux); nothing elsewhere."""
     try:
         with open("/proc/self/clear_refs", "w") as file:

@@ -66,7 +66,7 @@ from ..runtime.checks import check_int, check_vertex_map
 from ..runtime.threads import kdtree_query
 from ..spectral.basis import basis_size, orthogonal_fit, pair_bases
 from .refine import REFINE_K, REFINED_MAP
-from .shells import DESCRIPTOR_WEIGHT, NORMAL_WEIGHT, SPECTRAL_WEIGHT, rigid_motion as _rigid
+from .shells import DESCRIPTOR_WEIGHT, NORMAL_WEIGHT, SPECTRAL_WEIGHT, rigid_motion
 
 __all__ = ["ITERATIONS", "LIFT_ABOVE", "LIFT_K_FACTOR", "N_CANDIDATES", "N_SAMPLE", "SEARCH_DIMS", "SEARCH_EPS",
            "extended_basis", "interpolation_matrix", "lift_to_fine", "local_nearest"]
@@ -231,7 +231,7 @@ def lift_to_fine(copies: tuple[CoarseCopy, CoarseCopy], coarse_map: np.ndarray, 
     mapping = None
     for step, size in enumerate(np.linspace(min(first_k, k), k, iterations + 1).round().astype(int)):
         p1, images, weights, basis, image_basis = fit
-        rigid = _rigid(p1, images, weights, side)
+        rigid = rigid_motion(p1, images, weights, side)
         deformation = basis[:, :size].T @ (weights[:, None] * (images - rigid(p1)))  # (size, 3), in the basis
         C = orthogonal_fit(basis[:, :spectral], image_basis[:, :spectral])  # Phi1 C ~ Phi2[T]
         deformed = rigid(x1) + P1 @ (phi1c[:, :size] @ deformation).astype(np.float32)

@@ -297,7 +297,7 @@ class _Step:
         # full resolution), then the smooth deformation: the displacement the map still asks for,
         # projected on the k functions (mass-weighted, estimated on the sample).
         side = self.side
-        moved = _rigid(shell1[s], shell2[images], self.weights, side)(shell1)
+        moved = rigid_motion(shell1[s], shell2[images], self.weights, side)(shell1)
         coefficients = p1[s].T @ (self.weights[:, None] * (shell2[images] - moved[s]))  # in the basis
         self.deformation = float(np.sum(coefficients ** 2))  # its mass-weighted squared norm (orthonormal basis)
         deformed = moved + p1 @ coefficients
@@ -323,8 +323,10 @@ class _Step:
         return found
 
 
-def _rigid(points: np.ndarray, onto: np.ndarray, weights: np.ndarray, side: float):
+def rigid_motion(points: np.ndarray, onto: np.ndarray, weights: np.ndarray, side: float):
     """The orthogonal motion of least weighted squared distance from ``points`` to ``onto`` (Kabsch).
+
+    Also the lift's (:mod:`meshcorr.stages.lift`).
 
     ``side``: +1 for a rotation, -1 for a reflection (the determinant is held to it, as Kabsch's
     correction holds it to +1). Returns the motion as a function of (m, 3) coordinates.
@@ -334,10 +336,6 @@ def _rigid(points: np.ndarray, onto: np.ndarray, weights: np.ndarray, side: floa
     turn = side * (np.sign(np.linalg.det(U @ Vt)) or 1.0)
     rotation = U @ np.diag([1.0, 1.0, turn]) @ Vt  # row vectors: x -> x R
     return lambda x: (x - mean_p) @ rotation + mean_q
-
-
-#: The shells' orthogonal motion (:func:`_rigid`), for the lift of :mod:`meshcorr.stages.lift`.
-rigid_motion = _rigid
 
 
 def _unit_shape(mesh: Mesh, fraction: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
